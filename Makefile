@@ -1,0 +1,48 @@
+# viewpose: the commands the README names. Each target installs the Debian packages it needs
+# (scripts/install-deps.sh, apt-get; sudo when not root), configures, builds and runs.
+#   make demo           build, then run the main job on data the program makes itself
+#   make test           build and run the whole test suite (ctest)
+#   make test-sanitize  the same suite under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make fuzz           build the libFuzzer targets (clang) and run each for FUZZ_SECONDS
+#   make check          all three, as CI runs them
+#   make bench          micro-benchmarks of each stage
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+FUZZ_SECONDS ?= 60
+BUILD := build
+CMAKE_FLAGS ?=
+
+.PHONY: all deps build demo test test-sanitize fuzz check bench clean
+
+all: build
+
+deps:
+	@scripts/install-deps.sh build
+
+build: deps
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
+	@cmake --build $(BUILD) -j $(JOBS)
+
+demo: build
+	@./$(BUILD)/viewpose demo --out demo-out
+
+test: build
+	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+test-sanitize: deps
+	@cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVIEWPOSE_SANITIZE=ON -DVIEWPOSE_BENCH=OFF >/dev/null
+	@cmake --build build-sanitize -j $(JOBS)
+	@cd build-sanitize && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
+
+fuzz:
+	@scripts/install-deps.sh build fuzz
+	@CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVIEWPOSE_FUZZ=ON >/dev/null
+	@cmake --build build-fuzz -j $(JOBS)
+	@scripts/run-fuzzers.sh build-fuzz $(FUZZ_SECONDS)
+
+check: test test-sanitize fuzz
+
+bench: build
+	@./$(BUILD)/viewpose_bench
+
+clean:
+	rm -rf build build-sanitize build-fuzz demo-out

@@ -1,0 +1,18 @@
+#pragma once
+// One function per subcommand: it adds itself to the app and, when chosen, runs and sets the exit
+// code. Errors are thrown as viewpose::Error and printed as one line by main().
+#include <filesystem>
+
+#include <CLI/CLI.hpp>
+
+#include "viewpose/io/inspect.hpp"
+
+namespace viewpose::cli {
+
+void add_info_command(CLI::App& app, int& exit_code);
+void add_demo_command(CLI::App& app, int& exit_code);
+
+/// Prints what inspect_file found, as `viewpose info` shows it.
+void print_file_info(const std::filesystem::path& path, const FileInfo& info);
+
+}  // namespace viewpose::cli

@@ -1,0 +1,37 @@
+// viewpose: find known objects in one depth frame and estimate their 6-DoF poses from CAD models.
+#include <cstdio>
+#include <exception>
+
+#include <fmt/format.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include "commands.hpp"
+#include "viewpose/core/error.hpp"
+
+int main(int argc, char** argv) {
+  // Messages go to stderr so that stdout carries only results.
+  auto logger = spdlog::stderr_color_mt("viewpose");
+  logger->set_pattern("viewpose: %l: %v");
+  spdlog::set_default_logger(logger);
+
+  CLI::App app{"viewpose " VIEWPOSE_VERSION
+               ": find known objects in one depth frame and estimate their 6-DoF poses from CAD models"};
+  app.set_version_flag("--version", std::string(VIEWPOSE_VERSION));
+  app.require_subcommand(1);
+  int exit_code = 0;
+  viewpose::cli::add_info_command(app, exit_code);
+  viewpose::cli::add_demo_command(app, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const viewpose::Error& e) {
+    fmt::print(stderr, "viewpose: error: {}\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "viewpose: error: {}\n", e.what());
+    return 1;
+  }
+  return exit_code;
+}

@@ -1,0 +1,31 @@
+#pragma once
+// A depth image in metres: depth along the camera's z axis (not the ray length), row-major, NaN where
+// the sensor measured nothing.
+#include <cstddef>
+#include <vector>
+
+#include "viewpose/core/camera.hpp"
+#include "viewpose/core/point_cloud.hpp"
+
+namespace viewpose {
+
+struct DepthImage {
+  int width = 0;
+  int height = 0;
+  std::vector<float> depth_m;  ///< width * height values, row-major
+
+  DepthImage() = default;
+  /// A width x height image with no measurements (all NaN).
+  DepthImage(int w, int h);
+
+  float& at(int u, int v) { return depth_m[static_cast<std::size_t>(v) * width + u]; }
+  float at(int u, int v) const { return depth_m[static_cast<std::size_t>(v) * width + u]; }
+  /// Pixels with a finite depth greater than zero.
+  std::size_t count_valid() const;
+};
+
+/// The organized cloud (width x height, NaN for missing pixels) that `depth` measures through `K`.
+/// Throws viewpose::Error when the image size and the intrinsics' size disagree.
+PointCloud depth_to_cloud(const DepthImage& depth, const CameraIntrinsics& K);
+
+}  // namespace viewpose

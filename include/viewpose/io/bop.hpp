@@ -1,0 +1,114 @@
+#pragma once
+// The BOP dataset format (bop.felk.cvut.cz), the standard layout of 6-DoF pose benchmarks:
+//   DATASET/camera.json                       default intrinsics, image size, depth_scale
+//   DATASET/models/models_info.json           per object: diameter, extent, symmetries (mm)
+//   DATASET/models/obj_NNNNNN.ply             meshes in mm
+//   DATASET/SPLIT/SCENE/scene_camera.json     per image: cam_K, depth_scale
+//   DATASET/SPLIT/SCENE/scene_gt.json         per image: objects with cam_R_m2c, cam_t_m2c (mm)
+//   DATASET/SPLIT/SCENE/scene_gt_info.json    per image and object: visible fraction, boxes
+//   DATASET/SPLIT/SCENE/depth/NNNNNN.png      16-bit depth; depth_mm = value * depth_scale
+// YCB-Video's own naming of depth files, SCENE/NNNNNN-depth.png, is read as well.
+// Everything is converted to metres on reading and back to millimetres on writing.
+#include <array>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "viewpose/core/camera.hpp"
+#include "viewpose/core/depth_image.hpp"
+#include "viewpose/core/transform.hpp"
+
+namespace viewpose {
+
+/// camera.json, or one image's entry of scene_camera.json (whose image size is 0 when unknown).
+struct BopCamera {
+  CameraIntrinsics K;
+  double depth_scale_mm = 1.0;  ///< millimetres per stored depth unit
+};
+
+struct GroundTruthPose {
+  int obj_id = 0;
+  Transform T_camera_object = Transform::Identity();  ///< metres
+};
+
+struct GroundTruthInfo {
+  double visib_fract = 0.0;  ///< visible share of the object's silhouette, 0..1
+  int px_count_all = 0, px_count_valid = 0, px_count_visib = 0;
+  std::array<int, 4> bbox_obj{-1, -1, -1, -1};    ///< x, y, width, height in pixels
+  std::array<int, 4> bbox_visib{-1, -1, -1, -1};
+};
+
+struct ContinuousSymmetry {
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d offset_m = Eigen::Vector3d::Zero();
+};
+
+struct ModelInfo {
+  double diameter_m = 0.0;
+  Eigen::Vector3d min_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d size_m = Eigen::Vector3d::Zero();
+  std::vector<Transform> symmetries_discrete;  ///< object-frame transforms, metres
+  std::vector<ContinuousSymmetry> symmetries_continuous;
+};
+
+using ImageId = int;
+using SceneCameras = std::map<ImageId, BopCamera>;
+using SceneGroundTruth = std::map<ImageId, std::vector<GroundTruthPose>>;
+using SceneGroundTruthInfo = std::map<ImageId, std::vector<GroundTruthInfo>>;
+using ModelsInfo = std::map<int, ModelInfo>;
+
+// Parsers take the JSON text; `name` is used in error messages. Each checks types, counts and
+// values (rotation matrices, positive focal lengths) and throws viewpose::Error naming the entry.
+BopCamera parse_bop_camera(std::string_view json_text, std::string_view name);
+SceneCameras parse_scene_camera(std::string_view json_text, std::string_view name);
+SceneGroundTruth parse_scene_gt(std::string_view json_text, std::string_view name);
+SceneGroundTruthInfo parse_scene_gt_info(std::string_view json_text, std::string_view name);
+ModelsInfo parse_models_info(std::string_view json_text, std::string_view name);
+
+std::string format_bop_camera(const BopCamera& camera);
+std::string format_scene_camera(const SceneCameras& cameras);
+std::string format_scene_gt(const SceneGroundTruth& gt);
+std::string format_scene_gt_info(const SceneGroundTruthInfo& info);
+std::string format_models_info(const ModelsInfo& models);
+
+/// One image of a split, with everything needed to load and score it.
+struct BopImage {
+  int scene_id = 0;
+  ImageId im_id = 0;
+  std::filesystem::path depth_path;
+  BopCamera camera;  ///< size from camera.json when present, else filled by load_bop_depth
+  std::vector<GroundTruthPose> gt;
+  std::vector<GroundTruthInfo> gt_info;  ///< empty, or one per gt entry
+};
+
+struct BopDataset {
+  std::filesystem::path root;
+  std::string split;
+  std::optional<BopCamera> camera;  ///< camera.json, when the dataset has one
+  ModelsInfo models;                ///< models_info.json, when the dataset has one
+  std::map<int, std::filesystem::path> model_files;  ///< obj_id -> obj_NNNNNN.ply
+  std::vector<BopImage> images;     ///< sorted by scene, then image
+};
+
+struct BopOpenOptions {
+  std::string models_dir = "models";  ///< folder under the root with models_info.json and meshes
+};
+
+/// Reads a split's json files and checks that every image's depth file exists. Throws
+/// viewpose::Error naming the first missing or malformed file.
+BopDataset open_bop_dataset(const std::filesystem::path& root, std::string_view split,
+                            const BopOpenOptions& options = {});
+
+/// The image's depth in metres, and its intrinsics with the image size filled in.
+struct BopFrame {
+  DepthImage depth;
+  CameraIntrinsics K;
+};
+BopFrame load_bop_frame(const BopImage& image);
+
+}  // namespace viewpose

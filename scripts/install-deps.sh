@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages viewpose needs to build, test and fuzz. Idempotent: packages that
+# are already installed are skipped, and apt-get runs only when something is missing.
+# Usage: scripts/install-deps.sh [build|fuzz|pcl]...   (default: build)
+set -euo pipefail
+
+build_pkgs=(build-essential cmake pkg-config
+            libeigen3-dev libnanoflann-dev libassimp-dev libpng-dev liblzf-dev nlohmann-json3-dev
+            libcli11-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev)
+fuzz_pkgs=(clang libclang-rt-dev)   # libFuzzer and the sanitizer runtimes for clang
+pcl_pkgs=(libpcl-dev)               # only for the optional side-by-side benchmark
+
+wanted=()
+for group in "${@:-build}"; do
+  case "$group" in
+    build) wanted+=("${build_pkgs[@]}") ;;
+    fuzz)  wanted+=("${build_pkgs[@]}" "${fuzz_pkgs[@]}") ;;
+    pcl)   wanted+=("${pcl_pkgs[@]}") ;;
+    *) echo "install-deps: unknown group '$group' (build, fuzz or pcl)" >&2; exit 2 ;;
+  esac
+done
+
+# Each package once, even when two groups name it.
+mapfile -t wanted < <(printf "%s\n" "${wanted[@]}" | sort -u)
+missing=()
+for p in "${wanted[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "install-deps: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+  sudo="sudo"
+fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -1,0 +1,49 @@
+#include "viewpose/core/depth_image.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "viewpose/core/error.hpp"
+
+namespace viewpose {
+
+DepthImage::DepthImage(int w, int h)
+    : width(w), height(h),
+      depth_m(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), std::numeric_limits<float>::quiet_NaN()) {}
+
+std::size_t DepthImage::count_valid() const {
+  std::size_t n = 0;
+  for (float z : depth_m) n += (std::isfinite(z) && z > 0.0f) ? 1 : 0;
+  return n;
+}
+
+PointCloud depth_to_cloud(const DepthImage& depth, const CameraIntrinsics& K) {
+  K.validate();
+  if (depth.width != K.width || depth.height != K.height) {
+    throw Error(fmt::format("depth image is {}x{} but the camera intrinsics are for {}x{}", depth.width,
+                            depth.height, K.width, K.height));
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  PointCloud cloud;
+  cloud.width = depth.width;
+  cloud.height = depth.height;
+  cloud.points.resize(depth.depth_m.size());
+  // Precomputed per-column and per-row ray slopes: the unprojection is then two multiplies a pixel.
+  std::vector<float> x_over_z(static_cast<std::size_t>(depth.width));
+  for (int u = 0; u < depth.width; ++u) x_over_z[static_cast<std::size_t>(u)] = static_cast<float>((u - K.cx) / K.fx);
+  for (int v = 0; v < depth.height; ++v) {
+    const float y_over_z = static_cast<float>((v - K.cy) / K.fy);
+    for (int u = 0; u < depth.width; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * depth.width + u;
+      const float z = depth.depth_m[i];
+      cloud.points[i] = (std::isfinite(z) && z > 0.0f)
+                            ? Eigen::Vector3f(x_over_z[static_cast<std::size_t>(u)] * z, y_over_z * z, z)
+                            : Eigen::Vector3f(nan, nan, nan);
+    }
+  }
+  return cloud;
+}
+
+}  // namespace viewpose
