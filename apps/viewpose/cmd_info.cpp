@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "camera_flags.hpp"
 #include "commands.hpp"
 #include "viewpose/core/error.hpp"
 
@@ -44,18 +45,19 @@ void print_file_info(const fs::path& path, const FileInfo& info) {
 void add_info_command(CLI::App& app, int& exit_code) {
   struct Options {
     std::vector<std::string> files;
-    double depth_scale_mm = 1.0;
+    CameraFlags camera;
   };
   auto opts = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
       "info", "Say what files hold: PCD, PLY, meshes (OBJ, STL, OFF, ...), 16-bit depth PNG, BOP json, BOP results "
               "CSV, BOP dataset folders");
   cmd->add_option("files", opts->files, "Files or BOP dataset folders")->required();
-  cmd->add_option("--depth-scale", opts->depth_scale_mm, "Millimetres per unit in depth PNGs (BOP depth_scale)")
-      ->check(CLI::PositiveNumber);
+  opts->camera.add_to(*cmd);
+  cmd->footer("With --camera or --intrinsics, depth PNGs are also turned into points and their box reported.");
   cmd->callback([opts, &exit_code] {
     InspectOptions options;
-    options.depth_png_metres_per_unit = opts->depth_scale_mm / 1000.0;
+    options.depth_png_metres_per_unit = opts->camera.depth_scale() / 1000.0;
+    if (const auto cam = opts->camera.camera()) options.camera = cam->K;
     bool first = true;
     for (const std::string& file : opts->files) {
       try {

@@ -50,6 +50,11 @@ FileInfo inspect_cloud(const PointCloud& cloud, std::string kind, std::vector<st
 
 FileInfo inspect_depth_png(const fs::path& path, const InspectOptions& options) {
   const DepthImage depth = read_depth_png(path, options.depth_png_metres_per_unit);
+  if (options.camera && options.camera->width != 0 &&
+      (options.camera->width != depth.width || options.camera->height != depth.height)) {
+    throw Error(fmt::format("{}: image is {}x{} but the camera is {}x{}", path.string(), depth.width, depth.height,
+                            options.camera->width, options.camera->height));
+  }
   FileInfo info;
   info.kind = "16-bit depth PNG";
   info.points = depth.depth_m.size();
@@ -70,6 +75,17 @@ FileInfo inspect_depth_png(const fs::path& path, const InspectOptions& options) 
     }
   } else {
     info.problems.push_back("no valid pixels (every depth is 0)");
+  }
+  if (options.camera) {
+    CameraIntrinsics K = *options.camera;
+    if (K.width == 0 && K.height == 0) {
+      K.width = depth.width;
+      K.height = depth.height;
+    }
+    const PointCloud cloud = depth_to_cloud(depth, K);  // throws, naming both sizes, on a mismatch
+    info.bbox = bounding_box(cloud.points);
+    info.bbox_unit = LengthUnit::Metres;
+    info.notes.push_back(fmt::format("intrinsics fx {} fy {} cx {} cy {}", K.fx, K.fy, K.cx, K.cy));
   }
   return info;
 }

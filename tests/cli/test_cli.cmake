@@ -37,6 +37,13 @@ run(TRUE info "${WORK}/demo/scene_compressed.pcd" "${WORK}/demo/box_mm.ply")
 expect_in("${OUT}" "PCD point cloud (binary_compressed, v0.7)")
 expect_in("${OUT}" "units guess:  millimetres")
 
+# Intrinsics from a BOP camera file or from flags turn a depth PNG into points.
+run(TRUE info "${WORK}/demo/scene_depth.png" --camera "${WORK}/demo/camera.json")
+expect_in("${OUT}" "intrinsics fx 525 fy 525 cx 319.5 cy 239.5")
+run(TRUE info "${WORK}/demo/scene_depth.png" --intrinsics 525 525 319.5 239.5 --depth-scale 1)
+expect_in("${OUT}" "to [0.9129, 0.6843, 1.5] m")
+run(FALSE info "${WORK}/demo/scene_depth.png" --intrinsics 525 525 319.5)
+
 # Bad input: one line on stderr naming the file, non-zero exit, and the good files still reported.
 run(FALSE info "${WORK}/missing.pcd")
 expect_in("${ERR}" "viewpose: error: ${WORK}/missing.pcd: no such file")

@@ -105,6 +105,24 @@ TEST(Inspect, EveryFormatIsRecognizedAndCounted) {
   expect_error([&] { inspect_file(dir.path()); }, "no BOP split");
 }
 
+TEST(Inspect, DepthPngWithIntrinsicsReportsThePointsItMakes) {
+  test::TempDir dir;
+  DepthImage d(8, 4);
+  d.at(1, 1) = 0.75f;
+  d.at(2, 1) = 1.5f;
+  write_depth_png(dir / "d.png", d, 0.001);
+  InspectOptions options;
+  options.camera = CameraIntrinsics{100, 100, 0, 0, 0, 0};
+  const FileInfo info = inspect_file(dir / "d.png", options);
+  ASSERT_FALSE(info.bbox.empty);
+  EXPECT_EQ(info.bbox_unit, LengthUnit::Metres);
+  // (u, v) = (1, 1) at 0.75 m and (2, 1) at 1.5 m: x = u z / 100, y = v z / 100.
+  EXPECT_TRUE(info.bbox.min.isApprox(Eigen::Vector3f(0.0075f, 0.0075f, 0.75f), 1e-5f)) << info.bbox.min.transpose();
+  EXPECT_TRUE(info.bbox.max.isApprox(Eigen::Vector3f(0.03f, 0.015f, 1.5f), 1e-5f)) << info.bbox.max.transpose();
+  options.camera = CameraIntrinsics{100, 100, 0, 0, 640, 480};
+  expect_error([&] { inspect_file(dir / "d.png", options); }, "image is 8x4 but the camera is 640x480");
+}
+
 TEST(Inspect, EmptyAndNaNOnlyCloudsAreReportedAsProblems) {
   test::TempDir dir;
   write_pcd(dir / "empty.pcd", PointCloud::from_points({}), PcdEncoding::Binary);

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "viewpose/core/camera.hpp"
 #include "viewpose/core/point_cloud.hpp"
 #include "viewpose/core/units.hpp"
 
@@ -27,6 +28,9 @@ struct FileInfo {
 
 struct InspectOptions {
   double depth_png_metres_per_unit = 0.001;  ///< scale for bare depth PNGs
+  /// Intrinsics for depth PNGs: when set, the points they make are measured too. An image size
+  /// of 0 takes the image's own; another size must match it.
+  std::optional<CameraIntrinsics> camera;
 };
 
 /// Reads `path` (PCD, PLY, a mesh assimp knows, a 16-bit depth PNG, BOP json or results CSV, or a
