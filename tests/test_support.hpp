@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <random>
@@ -20,8 +21,12 @@ namespace viewpose::test {
 
 namespace fs = std::filesystem;
 
-/// ../shared beside the checkout (data, reference fixtures). Absent in a user's clone.
-inline fs::path shared_dir() { return fs::path(VIEWPOSE_SHARED_DIR); }
+/// ../shared beside the checkout (data, reference fixtures), or $VIEWPOSE_SHARED_DIR when set.
+/// Absent in a user's clone.
+inline fs::path shared_dir() {
+  const char* env = std::getenv("VIEWPOSE_SHARED_DIR");
+  return fs::path(env && *env ? env : VIEWPOSE_SHARED_DIR);
+}
 inline fs::path shared_data() { return shared_dir() / "data"; }
 
 /// Skips the calling test, with a clear message, when ../shared/data is not there.
