@@ -2,6 +2,10 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
@@ -30,6 +34,66 @@ double TriangleMesh::surface_area() const {
     area += 0.5 * (b - a).cross(c - a).norm();
   }
   return area;
+}
+
+Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                          const Eigen::Vector3d& c) {
+  // Voronoi regions of the triangle's vertices, edges and face (Ericson, Real-Time Collision
+  // Detection, 5.1.5).
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const double denom = va + vb + vc;
+  if (!(std::abs(denom) > 0)) return a;  // degenerate triangle
+  return a + ab * (vb / denom) + ac * (vc / denom);
+}
+
+double distance_to_surface(const TriangleMesh& mesh, const Eigen::Vector3d& p) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d q = closest_point_on_triangle(p, mesh.vertices[t[0]].cast<double>(),
+                                                        mesh.vertices[t[1]].cast<double>(), mesh.vertices[t[2]].cast<double>());
+    best = std::min(best, (q - p).squaredNorm());
+  }
+  return std::sqrt(best);
+}
+
+double mesh_diameter(const TriangleMesh& mesh) {
+  const auto& v = mesh.vertices;
+  std::vector<std::size_t> candidates;
+  if (v.size() <= 20000) {
+    candidates.resize(v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) candidates[i] = i;
+  } else {
+    // Fibonacci-sphere directions; the diameter's ends are extreme along their own direction.
+    const int n = 1280;
+    for (int k = 0; k < n; ++k) {
+      const double z = 1.0 - (2.0 * k + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = k * 2.399963229728653;
+      const Eigen::Vector3f d(static_cast<float>(r * std::cos(phi)), static_cast<float>(r * std::sin(phi)), static_cast<float>(z));
+      std::size_t best = 0;
+      for (std::size_t i = 1; i < v.size(); ++i) if (v[i].dot(d) > v[best].dot(d)) best = i;
+      candidates.push_back(best);
+    }
+  }
+  double best = 0.0;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    for (std::size_t j = i + 1; j < candidates.size(); ++j) {
+      best = std::max(best, (v[candidates[i]] - v[candidates[j]]).cast<double>().squaredNorm());
+    }
+  }
+  return std::sqrt(best);
 }
 
 TriangleMesh make_box_mesh(const Eigen::Vector3f& size) {

@@ -166,7 +166,6 @@ FileInfo inspect_dataset(const fs::path& dir) {
       scenes.insert(im.scene_id);
       poses += im.gt.size();
     }
-    info.points += ds.images.size();
     info.notes.push_back(fmt::format("split '{}': {} scenes, {} images, {} ground-truth poses", split, scenes.size(),
                                      ds.images.size(), poses));
     if (split == splits.front()) {
@@ -217,7 +216,6 @@ FileInfo inspect_file(const fs::path& path, const InspectOptions& options) {
     }
     FileInfo info;
     info.kind = "BOP19 results CSV";
-    info.points = results.size();
     info.notes.push_back(fmt::format("{} estimates over {} images, {} objects", results.size(), images.size(), objects.size()));
     return info;
   }

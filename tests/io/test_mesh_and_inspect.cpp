@@ -99,7 +99,7 @@ TEST(Inspect, EveryFormatIsRecognizedAndCounted) {
   EXPECT_EQ(png.notes[0], "depth 0.7500 to 1.5000 m at 0.001 m per unit");
 
   EXPECT_EQ(inspect_file(dir / "camera.json").kind, "BOP camera.json");
-  EXPECT_EQ(inspect_file(dir / "r.csv").points, 1u);
+  EXPECT_EQ(inspect_file(dir / "r.csv").notes, std::vector<std::string>{"1 estimates over 1 images, 1 objects"});
   write_file_atomic(dir / "x.xyzw", "1 2 3\n");
   expect_error([&] { inspect_file(dir / "x.xyzw"); }, "unknown file type '.xyzw'");
   expect_error([&] { inspect_file(dir.path()); }, "no BOP split");

@@ -1,4 +1,6 @@
+// PNG reading and writing through libpng: 16-bit depth images and 8-bit RGB pictures.
 #include "viewpose/io/depth_png.hpp"
+#include "viewpose/io/image_png.hpp"
 
 #include <png.h>
 
@@ -103,7 +105,9 @@ bool decode(PngIo& io, std::vector<std::uint16_t>& pixels, std::vector<png_bytep
   return true;
 }
 
-bool encode(PngIo& io, const std::vector<std::uint16_t>& pixels, int width, int height) {
+// Encodes rows of `row_bytes` bytes each; 16-bit samples are given in host order.
+bool encode(PngIo& io, const std::uint8_t* pixels, std::size_t row_bytes, int width, int height, int bit_depth,
+            int colour_type) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &io, on_error, on_warning);
   if (!png) return false;
   png_infop info = png_create_info_struct(png);
@@ -112,14 +116,14 @@ bool encode(PngIo& io, const std::vector<std::uint16_t>& pixels, int width, int 
     return false;
   }
   png_set_write_fn(png, &io, on_write, on_flush);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), 16, PNG_COLOR_TYPE_GRAY,
+  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), bit_depth, colour_type,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, 3);  // depth compresses well at low levels; writing stays fast
   png_write_info(png, info);
-  if constexpr (std::endian::native == std::endian::little) png_set_swap(png);
-  for (int y = 0; y < height; ++y) {
-    png_write_row(png, reinterpret_cast<png_const_bytep>(pixels.data() + static_cast<std::size_t>(y) * width));
+  if constexpr (std::endian::native == std::endian::little) {
+    if (bit_depth == 16) png_set_swap(png);
   }
+  for (int y = 0; y < height; ++y) png_write_row(png, pixels + static_cast<std::size_t>(y) * row_bytes);
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
   return true;
@@ -175,12 +179,34 @@ std::vector<std::uint8_t> encode_depth_png(const DepthImage& depth, double metre
   std::vector<std::uint8_t> out;
   PngIo io;
   io.out = &out;
-  if (!encode(io, pixels, depth.width, depth.height)) throw Error(fmt::format("depth PNG: encoding failed: {}", io.message));
+  if (!encode(io, reinterpret_cast<const std::uint8_t*>(pixels.data()), 2 * static_cast<std::size_t>(depth.width),
+              depth.width, depth.height, 16, PNG_COLOR_TYPE_GRAY)) {
+    throw Error(fmt::format("depth PNG: encoding failed: {}", io.message));
+  }
   return out;
 }
 
 void write_depth_png(const std::filesystem::path& path, const DepthImage& depth, double metres_per_unit) {
   write_file_atomic(path, encode_depth_png(depth, metres_per_unit));
+}
+
+std::vector<std::uint8_t> encode_rgb_png(const RgbImage& image) {
+  if (image.width <= 0 || image.height <= 0 ||
+      image.rgb.size() != 3 * static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height)) {
+    throw Error(fmt::format("PNG: cannot write a {}x{} RGB image of {} bytes", image.width, image.height, image.rgb.size()));
+  }
+  std::vector<std::uint8_t> out;
+  PngIo io;
+  io.out = &out;
+  if (!encode(io, image.rgb.data(), 3 * static_cast<std::size_t>(image.width), image.width, image.height, 8,
+              PNG_COLOR_TYPE_RGB)) {
+    throw Error(fmt::format("PNG: encoding failed: {}", io.message));
+  }
+  return out;
+}
+
+void write_rgb_png(const std::filesystem::path& path, const RgbImage& image) {
+  write_file_atomic(path, encode_rgb_png(image));
 }
 
 }  // namespace viewpose

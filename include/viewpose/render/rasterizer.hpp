@@ -1,0 +1,40 @@
+#pragma once
+// A z-buffer rasterizer for depth: triangle meshes placed in the camera frame, rendered at given
+// intrinsics. Each pixel is sampled at its centre; depth is interpolated perspective-correctly
+// (1/z is affine across a projected triangle), so a planar face renders at its exact depth.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "viewpose/core/camera.hpp"
+#include "viewpose/core/depth_image.hpp"
+#include "viewpose/core/mesh.hpp"
+#include "viewpose/core/transform.hpp"
+
+namespace viewpose {
+
+struct MeshInstance {
+  const TriangleMesh* mesh = nullptr;
+  Transform T_camera_object = Transform::Identity();
+};
+
+struct RenderOptions {
+  double near_m = 0.01;  ///< triangles are clipped at this depth
+  bool normals = false;  ///< also return each pixel's surface normal
+};
+
+struct RenderedFrame {
+  DepthImage depth;                    ///< metres along z; NaN where no surface
+  std::vector<std::int32_t> instance;  ///< per pixel: index of the instance seen, -1 for none
+  std::vector<Eigen::Vector3f> normal;  ///< per pixel, camera frame, facing the camera (if asked)
+};
+
+/// Renders the nearest surface of all instances at every pixel.
+RenderedFrame render(std::span<const MeshInstance> instances, const CameraIntrinsics& K,
+                     const RenderOptions& options = {});
+
+/// One mesh seen from many poses (a view sphere), rendered in parallel.
+std::vector<RenderedFrame> render_views(const TriangleMesh& mesh, std::span<const Transform> T_camera_object,
+                                        const CameraIntrinsics& K, const RenderOptions& options = {});
+
+}  // namespace viewpose

@@ -1,0 +1,137 @@
+#include "viewpose/render/rasterizer.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "viewpose/core/error.hpp"
+
+namespace viewpose {
+
+namespace {
+
+// Rasterizes one camera-frame triangle (all vertices in front of the near plane) into the frame.
+class TriangleRasterizer {
+ public:
+  TriangleRasterizer(const CameraIntrinsics& K, RenderedFrame& frame, bool normals)
+      : K_(K), frame_(frame), normals_(normals) {}
+
+  void draw(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, std::int32_t instance) {
+    const std::array<Eigen::Vector3d, 3> p = {a, b, c};
+    std::array<double, 3> su, sv, inv_z;
+    for (int i = 0; i < 3; ++i) {
+      inv_z[i] = 1.0 / p[i].z();
+      su[i] = K_.fx * p[i].x() * inv_z[i] + K_.cx;
+      sv[i] = K_.fy * p[i].y() * inv_z[i] + K_.cy;
+    }
+    // Twice the signed area in pixels; degenerate (edge-on) triangles cover no pixel centre.
+    const double area = (su[1] - su[0]) * (sv[2] - sv[0]) - (sv[1] - sv[0]) * (su[2] - su[0]);
+    if (!(std::abs(area) > 1e-12)) return;
+    const int u0 = std::max(0, static_cast<int>(std::ceil(std::min({su[0], su[1], su[2]}))));
+    const int u1 = std::min(K_.width - 1, static_cast<int>(std::floor(std::max({su[0], su[1], su[2]}))));
+    const int v0 = std::max(0, static_cast<int>(std::ceil(std::min({sv[0], sv[1], sv[2]}))));
+    const int v1 = std::min(K_.height - 1, static_cast<int>(std::floor(std::max({sv[0], sv[1], sv[2]}))));
+    if (u0 > u1 || v0 > v1) return;
+    Eigen::Vector3f n = Eigen::Vector3f::Zero();
+    if (normals_) {
+      Eigen::Vector3d nd = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
+      if (nd.dot(p[0]) > 0) nd = -nd;  // face the camera
+      n = nd.cast<float>();
+    }
+    // Edge functions e_i(u, v) = A_i u + B_i v + C_i, positive inside for a counter-clockwise
+    // triangle; divided by the area they are the barycentric weights of the opposite vertex.
+    std::array<double, 3> A, B, C;
+    for (int i = 0; i < 3; ++i) {
+      const int j = (i + 1) % 3, k = (i + 2) % 3;
+      A[i] = (sv[j] - sv[k]) / area;
+      B[i] = (su[k] - su[j]) / area;
+      C[i] = (su[j] * sv[k] - su[k] * sv[j]) / area;
+    }
+    const double eps = -1e-9;  // pixel centres on an edge belong to both triangles: no cracks
+    for (int v = v0; v <= v1; ++v) {
+      for (int u = u0; u <= u1; ++u) {
+        const double w0 = A[0] * u + B[0] * v + C[0];
+        const double w1 = A[1] * u + B[1] * v + C[1];
+        const double w2 = A[2] * u + B[2] * v + C[2];
+        if (w0 < eps || w1 < eps || w2 < eps) continue;
+        const double z = 1.0 / (w0 * inv_z[0] + w1 * inv_z[1] + w2 * inv_z[2]);
+        const std::size_t i = static_cast<std::size_t>(v) * static_cast<std::size_t>(K_.width) + static_cast<std::size_t>(u);
+        float& depth = frame_.depth.depth_m[i];
+        if (!(z >= depth)) {  // also true when depth is NaN (nothing drawn yet)
+          depth = static_cast<float>(z);
+          frame_.instance[i] = instance;
+          if (normals_) frame_.normal[i] = n;
+        }
+      }
+    }
+  }
+
+ private:
+  const CameraIntrinsics& K_;
+  RenderedFrame& frame_;
+  bool normals_;
+};
+
+// Cuts a triangle at z = near; returns 0, 1 or 2 triangles in front of it (as a fan of `out`).
+int clip_near(const std::array<Eigen::Vector3d, 3>& tri, double near, std::array<Eigen::Vector3d, 4>& out) {
+  int n = 0;
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d& a = tri[i];
+    const Eigen::Vector3d& b = tri[(i + 1) % 3];
+    const bool a_in = a.z() >= near, b_in = b.z() >= near;
+    if (a_in) out[n++] = a;
+    if (a_in != b_in) out[n++] = a + (b - a) * ((near - a.z()) / (b.z() - a.z()));
+  }
+  return n;  // a polygon of n vertices, n in {0, 3, 4}
+}
+
+}  // namespace
+
+RenderedFrame render(std::span<const MeshInstance> instances, const CameraIntrinsics& K, const RenderOptions& options) {
+  K.validate();
+  if (!(options.near_m > 0)) throw Error(fmt::format("render: near plane {} must be positive", options.near_m));
+  RenderedFrame frame;
+  frame.depth = DepthImage(K.width, K.height);
+  frame.instance.assign(frame.depth.depth_m.size(), -1);
+  if (options.normals) frame.normal.assign(frame.depth.depth_m.size(), Eigen::Vector3f::Zero());
+  TriangleRasterizer raster(K, frame, options.normals);
+  std::vector<Eigen::Vector3d> camera_vertices;
+  for (std::size_t m = 0; m < instances.size(); ++m) {
+    const TriangleMesh& mesh = *instances[m].mesh;
+    mesh.check_consistent();
+    camera_vertices.resize(mesh.vertices.size());
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+      camera_vertices[v] = instances[m].T_camera_object * mesh.vertices[v].cast<double>();
+    }
+    const auto id = static_cast<std::int32_t>(m);
+    for (const auto& t : mesh.triangles) {
+      const std::array<Eigen::Vector3d, 3> tri = {camera_vertices[t[0]], camera_vertices[t[1]], camera_vertices[t[2]]};
+      if (tri[0].z() >= options.near_m && tri[1].z() >= options.near_m && tri[2].z() >= options.near_m) {
+        raster.draw(tri[0], tri[1], tri[2], id);
+        continue;
+      }
+      std::array<Eigen::Vector3d, 4> poly;
+      const int n = clip_near(tri, options.near_m, poly);
+      for (int k = 1; k + 1 < n; ++k) raster.draw(poly[0], poly[static_cast<std::size_t>(k)], poly[static_cast<std::size_t>(k + 1)], id);
+    }
+  }
+  return frame;
+}
+
+std::vector<RenderedFrame> render_views(const TriangleMesh& mesh, std::span<const Transform> T_camera_object,
+                                        const CameraIntrinsics& K, const RenderOptions& options) {
+  K.validate();
+  mesh.check_consistent();
+  std::vector<RenderedFrame> frames(T_camera_object.size());
+#pragma omp parallel for schedule(dynamic)
+  for (std::size_t i = 0; i < T_camera_object.size(); ++i) {
+    const MeshInstance instance{&mesh, T_camera_object[i]};
+    frames[i] = render(std::span(&instance, 1), K, options);
+  }
+  return frames;
+}
+
+}  // namespace viewpose
