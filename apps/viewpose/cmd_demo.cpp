@@ -15,32 +15,12 @@
 #include "viewpose/io/file.hpp"
 #include "viewpose/io/pcd.hpp"
 #include "viewpose/io/ply.hpp"
+#include "viewpose/render/shapes.hpp"
+#include "viewpose/simulate/scene.hpp"
 
 namespace viewpose::cli {
 
 namespace fs = std::filesystem;
-
-namespace {
-
-// A frame seen by a Kinect v1 at its nominal intrinsics: a wall 1.5 m away and a ball of 8 cm
-// radius 1 m in front of the camera, ray-cast exactly. It stands in until the renderer (issue 3).
-DepthImage analytic_scene(const CameraIntrinsics& K) {
-  DepthImage depth(K.width, K.height);
-  const Eigen::Vector3d centre(0.05, 0.0, 1.0);
-  const double radius = 0.08, wall_z = 1.5;
-  for (int v = 0; v < K.height; ++v) {
-    for (int u = 0; u < K.width; ++u) {
-      const Eigen::Vector3d ray = K.unproject(u, v, 1.0);  // z = 1, so the ray parameter is the depth
-      const double a = ray.squaredNorm(), b = -2.0 * ray.dot(centre), c = centre.squaredNorm() - radius * radius;
-      const double disc = b * b - 4 * a * c;
-      const double z = disc >= 0 ? (-b - std::sqrt(disc)) / (2 * a) : wall_z;
-      depth.at(u, v) = static_cast<float>(z);
-    }
-  }
-  return depth;
-}
-
-}  // namespace
 
 void add_demo_command(CLI::App& app, int& exit_code) {
   auto out_dir = std::make_shared<std::string>("demo-out");
@@ -51,21 +31,39 @@ void add_demo_command(CLI::App& app, int& exit_code) {
     const fs::path dir = *out_dir;
     fs::create_directories(dir);
     const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
-    fmt::print("viewpose demo: writes and reads back every file format, in {}\n\n", dir.string());
+    fmt::print("viewpose demo: a simulated Kinect frame of the detergent jug, in every file format, in {}\n\n",
+               dir.string());
 
-    const DepthImage depth = analytic_scene(K);
+    // The thesis's set-up: the jug on a table, its nearest surface 1 m from a Kinect v1.
+    auto t0 = Clock::now();
+    SeedExperimentOptions setup;
+    setup.distances_m = {1.0};
+    setup.orientations = 1;
+    const SimDataset scene = make_seed_experiment(SimObject{1, "jug", make_jug()}, K, setup, 1);
+    const SimulatedFrame frame = simulate_image(scene, scene.scenes[0].images[0], SensorModel::kinect_v1(), 1);
+    const double simulate_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    const DepthImage& depth = frame.depth;
     const PointCloud cloud = depth_to_cloud(depth, K);
+    const Transform& T = frame.gt[0].T_camera_object;
+    const Eigen::AngleAxisd rotation(T.linear());
+    fmt::print("rendered and passed through the sensor model in {:.1f} ms; {} of {} pixels have depth\n", simulate_ms,
+               depth.count_valid(), depth.depth_m.size());
+    fmt::print("ground truth T_camera_object of the jug: t = ({:.3f}, {:.3f}, {:.3f}) m, rotation {:.1f} deg about "
+               "({:.3f}, {:.3f}, {:.3f}), {:.0f}% visible\n\n",
+               T.translation().x(), T.translation().y(), T.translation().z(), rotation.angle() * 180.0 / 3.14159265358979,
+               rotation.axis().x(), rotation.axis().y(), rotation.axis().z(), 100.0 * frame.gt_info[0].visib_fract);
     write_file_atomic(dir / "camera.json", format_bop_camera(BopCamera{K, 1.0}));
     write_depth_png(dir / "scene_depth.png", depth, 0.001);
     write_pcd(dir / "scene_ascii.pcd", cloud, PcdEncoding::Ascii);
     write_pcd(dir / "scene_binary.pcd", cloud, PcdEncoding::Binary);
     write_pcd(dir / "scene_compressed.pcd", cloud, PcdEncoding::BinaryCompressed);
     write_ply(dir / "scene.ply", cloud, PlyEncoding::BinaryLittleEndian);
-    TriangleMesh box = make_box_mesh({60.0f, 40.0f, 150.0f});  // a carton, in millimetres as CAD exports it
-    write_ply(dir / "box_mm.ply", box, PlyEncoding::Ascii);
+    TriangleMesh jug_mm = make_jug();  // the model, in millimetres as CAD exports it
+    for (auto& v : jug_mm.vertices) v *= 1000.0f;
+    write_ply(dir / "jug_mm.ply", jug_mm, PlyEncoding::BinaryLittleEndian);
 
     for (const char* file : {"camera.json", "scene_depth.png", "scene_ascii.pcd", "scene_binary.pcd",
-                             "scene_compressed.pcd", "scene.ply", "box_mm.ply"}) {
+                             "scene_compressed.pcd", "scene.ply", "jug_mm.ply"}) {
       const auto start = Clock::now();
       const FileInfo info = inspect_file(dir / file);
       const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
@@ -73,9 +71,8 @@ void add_demo_command(CLI::App& app, int& exit_code) {
       fmt::print("  read in:      {:.1f} ms\n\n", ms);
     }
     fmt::print(
-        "Built so far: camera model, depth-to-cloud, and the PCD / PLY / mesh / depth PNG / BOP readers and writers.\n"
-        "Not built yet, so no object is recognized and no pose is printed:\n"
-        "  - rendering of CAD models and the Kinect sensor model (issue 3)\n"
+        "Built so far: file formats, the renderer and view sphere, the Kinect sensor model, `viewpose simulate`.\n"
+        "Not built yet, so no object is recognized and no pose is estimated:\n"
         "  - segmentation, normals, VFH and CRH descriptors, the view database (issue 4)\n"
         "  - pose estimation, ICP and verification (issue 5)\n");
     exit_code = 0;

@@ -13,20 +13,30 @@ namespace viewpose {
 
 namespace {
 
+// A camera-frame vertex with its image coordinates and inverse depth.
+struct ProjectedVertex {
+  Eigen::Vector3d p;
+  double su = 0, sv = 0, inv_z = 0;
+};
+
+ProjectedVertex project(const CameraIntrinsics& K, const Eigen::Vector3d& p) {
+  ProjectedVertex v;
+  v.p = p;
+  v.inv_z = 1.0 / p.z();
+  v.su = K.fx * p.x() * v.inv_z + K.cx;
+  v.sv = K.fy * p.y() * v.inv_z + K.cy;
+  return v;
+}
+
 // Rasterizes one camera-frame triangle (all vertices in front of the near plane) into the frame.
 class TriangleRasterizer {
  public:
   TriangleRasterizer(const CameraIntrinsics& K, RenderedFrame& frame, bool normals)
       : K_(K), frame_(frame), normals_(normals) {}
 
-  void draw(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, std::int32_t instance) {
-    const std::array<Eigen::Vector3d, 3> p = {a, b, c};
-    std::array<double, 3> su, sv, inv_z;
-    for (int i = 0; i < 3; ++i) {
-      inv_z[i] = 1.0 / p[i].z();
-      su[i] = K_.fx * p[i].x() * inv_z[i] + K_.cx;
-      sv[i] = K_.fy * p[i].y() * inv_z[i] + K_.cy;
-    }
+  void draw(const ProjectedVertex& a, const ProjectedVertex& b, const ProjectedVertex& c, std::int32_t instance) {
+    const std::array<Eigen::Vector3d, 3> p = {a.p, b.p, c.p};
+    const std::array<double, 3> su = {a.su, b.su, c.su}, sv = {a.sv, b.sv, c.sv}, inv_z = {a.inv_z, b.inv_z, c.inv_z};
     // Twice the signed area in pixels; degenerate (edge-on) triangles cover no pixel centre.
     const double area = (su[1] - su[0]) * (sv[2] - sv[0]) - (sv[1] - sv[0]) * (su[2] - su[0]);
     if (!(std::abs(area) > 1e-12)) return;
@@ -98,24 +108,27 @@ RenderedFrame render(std::span<const MeshInstance> instances, const CameraIntrin
   frame.instance.assign(frame.depth.depth_m.size(), -1);
   if (options.normals) frame.normal.assign(frame.depth.depth_m.size(), Eigen::Vector3f::Zero());
   TriangleRasterizer raster(K, frame, options.normals);
-  std::vector<Eigen::Vector3d> camera_vertices;
+  std::vector<ProjectedVertex> vertices;  // each vertex transformed and projected once
   for (std::size_t m = 0; m < instances.size(); ++m) {
     const TriangleMesh& mesh = *instances[m].mesh;
     mesh.check_consistent();
-    camera_vertices.resize(mesh.vertices.size());
+    vertices.resize(mesh.vertices.size());
     for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
-      camera_vertices[v] = instances[m].T_camera_object * mesh.vertices[v].cast<double>();
+      vertices[v] = project(K, instances[m].T_camera_object * mesh.vertices[v].cast<double>());
     }
     const auto id = static_cast<std::int32_t>(m);
     for (const auto& t : mesh.triangles) {
-      const std::array<Eigen::Vector3d, 3> tri = {camera_vertices[t[0]], camera_vertices[t[1]], camera_vertices[t[2]]};
-      if (tri[0].z() >= options.near_m && tri[1].z() >= options.near_m && tri[2].z() >= options.near_m) {
-        raster.draw(tri[0], tri[1], tri[2], id);
+      const ProjectedVertex &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
+      if (a.p.z() >= options.near_m && b.p.z() >= options.near_m && c.p.z() >= options.near_m) {
+        raster.draw(a, b, c, id);
         continue;
       }
       std::array<Eigen::Vector3d, 4> poly;
-      const int n = clip_near(tri, options.near_m, poly);
-      for (int k = 1; k + 1 < n; ++k) raster.draw(poly[0], poly[static_cast<std::size_t>(k)], poly[static_cast<std::size_t>(k + 1)], id);
+      const int n = clip_near({a.p, b.p, c.p}, options.near_m, poly);
+      for (int k = 1; k + 1 < n; ++k) {
+        raster.draw(project(K, poly[0]), project(K, poly[static_cast<std::size_t>(k)]),
+                    project(K, poly[static_cast<std::size_t>(k + 1)]), id);
+      }
     }
   }
   return frame;
