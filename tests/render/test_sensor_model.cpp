@@ -1,3 +1,5 @@
+#include <omp.h>
+
 #include <cmath>
 #include <numbers>
 
@@ -81,6 +83,22 @@ TEST(SensorModel, SameSeedSameFrameOtherSeedOtherNoise) {
   const DepthImage c = simulate_sensor(f, K, SensorModel::kinect_v1(), 4);
   EXPECT_EQ(std::memcmp(a.depth_m.data(), b.depth_m.data(), a.depth_m.size() * sizeof(float)), 0);
   EXPECT_NE(std::memcmp(a.depth_m.data(), c.depth_m.data(), a.depth_m.size() * sizeof(float)), 0);
+}
+
+TEST(SensorModel, OutputDoesNotDependOnTheThreadCount) {
+  const TriangleMesh wall = square(5.0f), card = square(0.2f);
+  const MeshInstance scene[] = {{&wall, make_transform(Eigen::Matrix3d::Identity(), {0, 0, 2.0})},
+                                {&card, make_transform(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY()).toRotationMatrix(), {0.1, 0, 1.0})}};
+  RenderOptions o;
+  o.normals = true;
+  const RenderedFrame f = render(scene, K, o);
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const DepthImage one = simulate_sensor(f, K, SensorModel::kinect_v1(), 99);
+  omp_set_num_threads(4);
+  const DepthImage four = simulate_sensor(f, K, SensorModel::kinect_v1(), 99);
+  omp_set_num_threads(before);
+  EXPECT_EQ(std::memcmp(one.depth_m.data(), four.depth_m.data(), one.depth_m.size() * sizeof(float)), 0);
 }
 
 TEST(SensorModel, ProjectorShadowFallsLeftOfAnObjectWithTheExpectedWidth) {
