@@ -1,0 +1,112 @@
+#include "viewpose/describe/crh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <utility>
+
+#include <Eigen/Geometry>
+
+namespace viewpose {
+
+namespace {
+constexpr int kBins = 90;
+constexpr double kPi = std::numbers::pi;
+
+// PCL's rotation taking the ray through `centroid` to the z axis, built as CRHEstimation builds it.
+template <typename Scalar>
+Eigen::Matrix<Scalar, 3, 3> ray_rotation(const Eigen::Matrix<Scalar, 3, 1>& centroid) {
+  Eigen::Matrix<Scalar, 3, 1> plane_normal = -centroid;
+  plane_normal.normalize();
+  Eigen::Matrix<Scalar, 3, 1> axis = plane_normal.cross(Eigen::Matrix<Scalar, 3, 1>::UnitZ());
+  const double rotation = -std::asin(std::min<double>(1.0, axis.norm()));
+  axis.normalize();
+  return Eigen::AngleAxis<Scalar>(static_cast<Scalar>(rotation), axis).toRotationMatrix();
+}
+}  // namespace
+
+Eigen::Matrix3d ray_to_z(const Eigen::Vector3d& centroid) { return ray_rotation<double>(centroid); }
+
+Crh compute_crh(std::span<const Eigen::Vector3f> normals, const Eigen::Vector3f& centroid) {
+  const Eigen::Matrix3f R = ray_rotation<float>(centroid);
+  std::array<float, kBins> spatial{};
+  float sum_w = 0.0f;
+  for (const Eigen::Vector3f& normal : normals) {
+    if (!normal.allFinite()) continue;
+    const Eigen::Vector3f n = R * normal;
+    const int bin = static_cast<int>(((std::atan2(n.y(), n.x()) + kPi) * 180.0 / kPi) / (360 / kBins)) % kBins;
+    const float w = std::sqrt(n.y() * n.y() + n.x() * n.x());
+    sum_w += w;
+    spatial[static_cast<std::size_t>(bin)] += w;
+  }
+  Crh crh{};
+  if (!(sum_w > 0)) return crh;
+  for (float& s : spatial) s /= sum_w;
+  // Real DFT, harmonics 0..45, each divided by the constant term (which is 1 after the division).
+  std::array<std::complex<double>, kBins / 2 + 1> F;
+  for (int k = 0; k <= kBins / 2; ++k) {
+    std::complex<double> sum = 0;
+    for (int j = 0; j < kBins; ++j) sum += static_cast<double>(spatial[static_cast<std::size_t>(j)]) * std::polar(1.0, -2 * kPi * k * j / kBins);
+    F[static_cast<std::size_t>(k)] = sum;
+  }
+  const double f0 = F[0].real();
+  crh[0] = static_cast<float>(F[0].real() / f0);
+  for (int k = 1; k < kBins / 2; ++k) {
+    crh[static_cast<std::size_t>(2 * k - 1)] = static_cast<float>(F[static_cast<std::size_t>(k)].real() / f0);
+    crh[static_cast<std::size_t>(2 * k)] = static_cast<float>(F[static_cast<std::size_t>(k)].imag() / f0);
+  }
+  crh[kBins - 1] = static_cast<float>(F[kBins / 2].real() / f0);
+  return crh;
+}
+
+std::vector<float> crh_roll_angles(const Crh& view, const Crh& scene, const RollOptions& options) {
+  constexpr int kLags = 2 * kBins;  // the spectra are zero-padded to 180: 2-degree steps
+  // Phase correlation: conj(view) * scene, each harmonic scaled to unit magnitude. Like PCL, the
+  // Nyquist product lands at index 89 of the padded spectrum.
+  std::array<std::complex<double>, kLags> product{};
+  product[0] = static_cast<double>(view[0]) * scene[0];
+  for (int k = 1; k < kBins / 2; ++k) {
+    const std::complex<float> a(view[static_cast<std::size_t>(2 * k - 1)], -view[static_cast<std::size_t>(2 * k)]);
+    const std::complex<float> b(scene[static_cast<std::size_t>(2 * k - 1)], scene[static_cast<std::size_t>(2 * k)]);
+    const std::complex<float> ab = a * b;
+    const float magnitude = std::abs(ab);
+    product[static_cast<std::size_t>(k)] = magnitude > 0 ? std::complex<double>(ab / magnitude) : 0.0;
+  }
+  product[kBins - 1] = static_cast<double>(view[kBins - 1]) * scene[kBins - 1];
+  std::vector<std::pair<float, int>> scored(kLags);
+  for (int n = 0; n < kLags; ++n) {
+    double re = 0;
+    for (int k = 0; k < kLags; ++k) {
+      if (product[static_cast<std::size_t>(k)] != 0.0) re += (product[static_cast<std::size_t>(k)] * std::polar(1.0, 2 * kPi * k * n / kLags)).real();
+    }
+    scored[static_cast<std::size_t>(n)] = {static_cast<float>(re), n};
+  }
+  std::stable_sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  constexpr int kPeakDistance = 5;
+  std::vector<int> peaks;
+  std::vector<float> angles;
+  const int scan = static_cast<int>(options.quantile * static_cast<float>(kLags));
+  for (int i = 0; i < scan && static_cast<int>(peaks.size()) < options.max_peaks; ++i) {
+    const auto [value, lag] = scored[static_cast<std::size_t>(i)];
+    if (value < scored[0].first * options.accept_threshold) continue;
+    // PCL's neighbourhood test, one-sided wrap included.
+    const bool near = std::any_of(peaks.begin(), peaks.end(), [&, lag = lag](int p) {
+      return std::abs(p - lag) <= kPeakDistance || std::abs(p - (lag - kLags)) <= kPeakDistance;
+    });
+    if (near) continue;
+    peaks.push_back(lag);
+    angles.push_back(static_cast<float>(lag) * (360.0f / static_cast<float>(kLags)));
+  }
+  return angles;
+}
+
+Transform crh_alignment(const Eigen::Vector3d& view_centroid, const Eigen::Vector3d& scene_centroid, double roll_deg) {
+  const Eigen::Matrix3d roll = Eigen::AngleAxisd(-roll_deg * kPi / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d M = ray_to_z(view_centroid).transpose() * roll * ray_to_z(scene_centroid);
+  // H carries scene coordinates into the view's; its inverse carries the view into the scene.
+  const Transform H = make_transform(M, view_centroid - M * scene_centroid);
+  return H.inverse();
+}
+
+}  // namespace viewpose
