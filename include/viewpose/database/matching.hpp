@@ -1,0 +1,22 @@
+#pragma once
+// Matching a description against the database: the k views nearest by chi-squared distance, by
+// exhaustive search (exact).
+#include <cstdint>
+#include <vector>
+
+#include "viewpose/database/view_database.hpp"
+
+namespace viewpose {
+
+struct Match {
+  std::uint32_t view = 0;  ///< index into ViewDatabase::views
+  float distance = 0;
+};
+
+/// Sum over bins of (a - b)^2 / (a + b), bins where both are 0 skipped (FLANN's ChiSquareDistance).
+float chi_squared(const Vfh& a, const Vfh& b);
+
+/// The k nearest views, nearest first (ties by view index).
+std::vector<Match> nearest_views(const ViewDatabase& db, const Vfh& query, std::size_t k = 20);
+
+}  // namespace viewpose

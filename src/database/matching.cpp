@@ -1,0 +1,29 @@
+#include "viewpose/database/matching.hpp"
+
+#include <algorithm>
+
+namespace viewpose {
+
+float chi_squared(const Vfh& a, const Vfh& b) {
+  float sum = 0.0f;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const float s = a[i] + b[i];
+    if (s > 0.0f) {
+      const float d = a[i] - b[i];
+      sum += d * d / s;
+    }
+  }
+  return sum;
+}
+
+std::vector<Match> nearest_views(const ViewDatabase& db, const Vfh& query, std::size_t k) {
+  std::vector<Match> all(db.views.size());
+  for (std::size_t i = 0; i < db.views.size(); ++i) all[i] = {static_cast<std::uint32_t>(i), chi_squared(query, db.views[i].vfh)};
+  const auto closer = [](const Match& a, const Match& b) { return a.distance < b.distance || (a.distance == b.distance && a.view < b.view); };
+  k = std::min(k, all.size());
+  std::partial_sort(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(k), all.end(), closer);
+  all.resize(k);
+  return all;
+}
+
+}  // namespace viewpose

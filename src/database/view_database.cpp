@@ -1,0 +1,269 @@
+#include "viewpose/database/view_database.hpp"
+
+#include <zlib.h>
+
+#include <cstring>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "viewpose/core/error.hpp"
+#include "viewpose/io/file.hpp"
+#include "viewpose/render/rasterizer.hpp"
+#include "viewpose/render/view_sphere.hpp"
+#include "viewpose/segment/voxel_grid.hpp"
+
+namespace viewpose {
+
+namespace {
+
+// File layout: an 32-byte header, then the payload it describes.
+constexpr char kMagic[8] = {'V', 'P', 'D', 'B', '\r', '\n', '\x1a', '\n'};  // catches text-mode copies too
+constexpr std::uint32_t kByteOrderMark = 0x01020304;
+constexpr std::size_t kHeaderBytes = 32;
+
+class Writer {
+ public:
+  template <typename T>
+  void put(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
+    bytes.insert(bytes.end(), p, p + sizeof(T));
+  }
+  void put_floats(const float* data, std::size_t n) {
+    const auto* p = reinterpret_cast<const std::uint8_t*>(data);
+    bytes.insert(bytes.end(), p, p + n * sizeof(float));
+  }
+  void put_string(const std::string& s) {
+    put(static_cast<std::uint32_t>(s.size()));
+    bytes.insert(bytes.end(), s.begin(), s.end());
+  }
+  void put_points(const std::vector<Eigen::Vector3f>& pts) {
+    put(static_cast<std::uint32_t>(pts.size()));
+    for (const auto& p : pts) put_floats(p.data(), 3);
+  }
+  std::vector<std::uint8_t> bytes;
+};
+
+class Reader {
+ public:
+  Reader(std::span<const std::uint8_t> bytes, std::string_view name) : bytes_(bytes), name_(name) {}
+  template <typename T>
+  T get() {
+    T v;
+    need(sizeof(T));
+    std::memcpy(&v, bytes_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return v;
+  }
+  void get_floats(float* out, std::size_t n) {
+    need(n * sizeof(float));
+    std::memcpy(out, bytes_.data() + pos_, n * sizeof(float));
+    pos_ += n * sizeof(float);
+  }
+  std::string get_string() {
+    const auto n = get<std::uint32_t>();
+    need(n);
+    std::string s(reinterpret_cast<const char*>(bytes_.data() + pos_), n);
+    pos_ += n;
+    return s;
+  }
+  std::vector<Eigen::Vector3f> get_points() {
+    const auto n = get<std::uint32_t>();
+    need(std::size_t{n} * 12);  // before allocating
+    std::vector<Eigen::Vector3f> pts(n);
+    for (auto& p : pts) get_floats(p.data(), 3);
+    return pts;
+  }
+  /// Fails unless `count` records of at least `min_bytes` each can still follow.
+  void need_records(std::size_t count, std::size_t min_bytes) const {
+    if (count > (bytes_.size() - pos_) / min_bytes) fail(fmt::format("says {} records but is too short for them", count));
+  }
+  bool at_end() const { return pos_ == bytes_.size(); }
+  [[noreturn]] void fail(const std::string& why) const { throw Error(fmt::format("{}: {}", name_, why)); }
+
+ private:
+  void need(std::size_t n) const {
+    if (n > bytes_.size() - pos_) fail("database ends early (truncated)");
+  }
+  std::span<const std::uint8_t> bytes_;
+  std::size_t pos_ = 0;
+  std::string_view name_;
+};
+
+nlohmann::json params_json(const DatabaseParams& p) {
+  const auto& K = p.camera;
+  return {{"camera", {{"fx", K.fx}, {"fy", K.fy}, {"cx", K.cx}, {"cy", K.cy}, {"width", K.width}, {"height", K.height}}},
+          {"subdivisions", p.subdivisions},
+          {"distance_m", p.distance_m},
+          {"voxel_m", p.voxel_m},
+          {"icp_voxel_m", p.icp_voxel_m},
+          {"normal_radius_m", p.describe.normals.radius_m},
+          {"vfh", {{"normalize_bins", p.describe.vfh.normalize_bins},
+                   {"normalize_distances", p.describe.vfh.normalize_distances},
+                   {"size_component", p.describe.vfh.size_component},
+                   {"pcl_compatible", p.describe.vfh.pcl_compatible}}}};
+}
+
+DatabaseParams params_from_json(const std::string& text, const Reader& r) {
+  try {
+    const auto j = nlohmann::json::parse(text);
+    DatabaseParams p;
+    const auto& c = j.at("camera");
+    p.camera = {c.at("fx").get<double>(), c.at("fy").get<double>(), c.at("cx").get<double>(), c.at("cy").get<double>(),
+                c.at("width").get<int>(), c.at("height").get<int>()};
+    p.subdivisions = j.at("subdivisions").get<int>();
+    p.distance_m = j.at("distance_m").get<double>();
+    p.voxel_m = j.at("voxel_m").get<float>();
+    p.icp_voxel_m = j.at("icp_voxel_m").get<float>();
+    p.describe.normals.radius_m = j.at("normal_radius_m").get<float>();
+    const auto& v = j.at("vfh");
+    p.describe.vfh.normalize_bins = v.at("normalize_bins").get<bool>();
+    p.describe.vfh.normalize_distances = v.at("normalize_distances").get<bool>();
+    p.describe.vfh.size_component = v.at("size_component").get<bool>();
+    p.describe.vfh.pcl_compatible = v.at("pcl_compatible").get<bool>();
+    return p;
+  } catch (const nlohmann::json::exception& e) {
+    r.fail(fmt::format("build parameters are unreadable: {}", e.what()));
+  }
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> ViewDatabase::serialize() const {
+  Writer w;
+  w.put_string(params_json(params).dump());
+  w.put(static_cast<std::uint32_t>(objects.size()));
+  for (const auto& o : objects) {
+    w.put(static_cast<std::int32_t>(o.id));
+    w.put_string(o.name);
+    w.put(o.diameter_m);
+  }
+  w.put(static_cast<std::uint32_t>(views.size()));
+  for (const auto& v : views) {
+    w.put(v.object);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) w.put(v.T_view_object(r, c));
+    w.put_floats(v.vfh.data(), v.vfh.size());
+    w.put_floats(v.crh.data(), v.crh.size());
+    w.put_floats(v.centroid.data(), 3);
+    w.put_points(v.points);
+    w.put_points(v.normals);
+    w.put_points(v.icp_points);
+  }
+  Writer file;
+  for (char c : kMagic) file.put(c);
+  file.put(kFormatVersion);
+  file.put(kByteOrderMark);
+  file.put(static_cast<std::uint64_t>(w.bytes.size()));
+  file.put(static_cast<std::uint32_t>(crc32(0, w.bytes.data(), static_cast<uInt>(w.bytes.size()))));
+  file.put(std::uint32_t{0});  // reserved
+  file.bytes.insert(file.bytes.end(), w.bytes.begin(), w.bytes.end());
+  return file.bytes;
+}
+
+ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std::string_view name) {
+  Reader header(bytes, name);
+  if (bytes.size() < kHeaderBytes || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) {
+    header.fail("not a viewpose view database (no VPDB header)");
+  }
+  std::uint32_t version, bom, crc;
+  std::uint64_t size;
+  std::memcpy(&version, bytes.data() + 8, 4);
+  std::memcpy(&bom, bytes.data() + 12, 4);
+  std::memcpy(&size, bytes.data() + 16, 8);
+  std::memcpy(&crc, bytes.data() + 24, 4);
+  if (bom != kByteOrderMark) header.fail("written on a machine of the other byte order; rebuild it here with `viewpose db build`");
+  if (version != kFormatVersion) {
+    header.fail(fmt::format("database format version {}, this viewpose reads version {}; rebuild it with `viewpose db build`",
+                            version, kFormatVersion));
+  }
+  if (size != bytes.size() - kHeaderBytes) {
+    header.fail(fmt::format("header says {} bytes of data but the file holds {} (truncated or padded)", size,
+                            bytes.size() - kHeaderBytes));
+  }
+  const auto payload = bytes.subspan(kHeaderBytes);
+  if (crc32(0, payload.data(), static_cast<uInt>(payload.size())) != crc) header.fail("checksum mismatch: the file is corrupted");
+
+  Reader r(payload, name);
+  ViewDatabase db;
+  db.params = params_from_json(r.get_string(), r);
+  const auto n_objects = r.get<std::uint32_t>();
+  r.need_records(n_objects, 16);
+  for (std::uint32_t i = 0; i < n_objects; ++i) {
+    DatabaseObject o;
+    o.id = r.get<std::int32_t>();
+    o.name = r.get_string();
+    o.diameter_m = r.get<double>();
+    db.objects.push_back(std::move(o));
+  }
+  const auto n_views = r.get<std::uint32_t>();
+  r.need_records(n_views, 4 + 96 + 4 * (308 + 90 + 3) + 12);
+  db.views.resize(n_views);
+  for (auto& v : db.views) {
+    v.object = r.get<std::uint32_t>();
+    if (v.object >= db.objects.size()) r.fail("a view names an object that does not exist");
+    for (int row = 0; row < 3; ++row)
+      for (int c = 0; c < 4; ++c) v.T_view_object(row, c) = r.get<double>();
+    r.get_floats(v.vfh.data(), v.vfh.size());
+    r.get_floats(v.crh.data(), v.crh.size());
+    r.get_floats(v.centroid.data(), 3);
+    v.points = r.get_points();
+    v.normals = r.get_points();
+    v.icp_points = r.get_points();
+    if (v.normals.size() != v.points.size()) r.fail("a view's normals do not match its points");
+  }
+  if (!r.at_end()) r.fail("unexpected data after the last view");
+  return db;
+}
+
+void ViewDatabase::save(const std::filesystem::path& path) const { write_file_atomic(path, serialize()); }
+
+ViewDatabase ViewDatabase::load(const std::filesystem::path& path) { return deserialize(read_file_bytes(path), path.string()); }
+
+PointCloud view_points(const DepthImage& depth, const CameraIntrinsics& K, float voxel_m) {
+  return voxel_downsample(depth_to_cloud(depth, K), voxel_m);
+}
+
+ViewEntry describe_view(const DepthImage& depth, const Transform& T_view_object, std::uint32_t object,
+                        const DatabaseParams& params) {
+  Description d = describe(view_points(depth, params.camera, params.voxel_m), params.describe);
+  ViewEntry v;
+  v.object = object;
+  v.T_view_object = T_view_object;
+  v.vfh = d.vfh;
+  v.crh = d.crh;
+  v.centroid = d.centroid;
+  v.icp_points = voxel_downsample(d.cloud, params.icp_voxel_m).points;
+  v.points = std::move(d.cloud.points);
+  v.normals = std::move(d.cloud.normals);
+  return v;
+}
+
+ViewDatabase build_view_database(std::span<const ObjectModel> objects, const DatabaseParams& params,
+                                 const std::function<void(std::size_t, std::size_t)>& progress) {
+  params.camera.validate();
+  ViewDatabase db;
+  db.params = params;
+  for (std::size_t o = 0; o < objects.size(); ++o) {
+    const TriangleMesh& mesh = objects[o].mesh;
+    if (mesh.triangles.empty()) throw Error(fmt::format("db build: object '{}' has no triangles", objects[o].name));
+    db.objects.push_back({objects[o].id, objects[o].name, mesh_diameter(mesh)});
+    const BoundingBox box = bounding_box(mesh);
+    const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
+    const std::vector<Transform> poses = view_sphere_poses(centre, params.distance_m, params.subdivisions);
+    const std::vector<RenderedFrame> frames = render_views(mesh, poses, params.camera);
+    std::vector<ViewEntry> entries(poses.size());
+#pragma omp parallel for schedule(dynamic)
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      entries[i] = describe_view(frames[i].depth, poses[i], static_cast<std::uint32_t>(o), params);
+    }
+    for (auto& e : entries) {
+      if (e.points.size() >= 3) db.views.push_back(std::move(e));  // a view that sees nothing is no use
+    }
+    if (progress) progress(o + 1, objects.size());
+  }
+  return db;
+}
+
+}  // namespace viewpose

@@ -1,0 +1,26 @@
+#include "viewpose/describe/describe.hpp"
+
+namespace viewpose {
+
+Description describe(PointCloud points, const DescribeOptions& options) {
+  PointCloud cloud = PointCloud::from_points(std::move(points.points));
+  estimate_normals(cloud, options.normals);
+  // Keep only points with a normal: they are the ones every later stage can use.
+  PointCloud kept;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (!cloud.normals[i].allFinite()) continue;
+    kept.points.push_back(cloud.points[i]);
+    kept.normals.push_back(cloud.normals[i]);
+    kept.curvature.push_back(cloud.curvature[i]);
+  }
+  kept.width = static_cast<int>(kept.points.size());
+  Description d;
+  for (const auto& p : kept.points) d.centroid += p;
+  if (!kept.points.empty()) d.centroid /= static_cast<float>(kept.points.size());
+  d.vfh = compute_vfh(kept.points, kept.normals, options.vfh);
+  d.crh = compute_crh(kept.normals, d.centroid);
+  d.cloud = std::move(kept);
+  return d;
+}
+
+}  // namespace viewpose

@@ -1,0 +1,214 @@
+#include <map>
+#include <numbers>
+#include <random>
+
+#include "test_support.hpp"
+#include "viewpose/core/kdtree.hpp"
+#include "viewpose/describe/normals.hpp"
+#include "viewpose/io/pcd.hpp"
+#include "viewpose/render/rasterizer.hpp"
+#include "viewpose/segment/segmentation.hpp"
+#include "viewpose/segment/voxel_grid.hpp"
+
+namespace viewpose {
+namespace {
+
+TEST(VoxelGrid, OnePointPerVoxelAtTheCentroid) {
+  // Three points in voxel (0,0,0), one in (1,0,0), one in (-1,-1,-1) at 1 cm leaves.
+  const PointCloud c = PointCloud::from_points(
+      {{0.001f, 0.002f, 0.003f}, {0.005f, 0.002f, 0.009f}, {0.009f, 0.008f, 0.0f}, {0.015f, 0.005f, 0.005f},
+       {-0.005f, -0.005f, -0.005f}, {NAN, 0, 0}});
+  const PointCloud v = voxel_downsample(c, 0.01f);
+  ASSERT_EQ(v.size(), 3u);
+  std::vector<Eigen::Vector3f> expected = {{-0.005f, -0.005f, -0.005f}, {0.005f, 0.004f, 0.004f}, {0.015f, 0.005f, 0.005f}};
+  for (const auto& e : expected) {
+    bool found = false;
+    for (const auto& p : v.points) found = found || (p - e).norm() < 1e-6f;
+    EXPECT_TRUE(found) << e.transpose();
+  }
+}
+
+// Points on the plane z = 1.2 - 0.5 y (a table seen from above), 4 mm apart, 1.5 x 1.5 m.
+std::vector<Eigen::Vector3f> table_points() {
+  std::vector<Eigen::Vector3f> pts;
+  for (float x = -0.75f; x <= 0.75f; x += 0.004f)
+    for (float y = -0.75f; y <= 0.75f; y += 0.004f) pts.emplace_back(x, y, 1.2f - 0.5f * y);
+  return pts;
+}
+
+// The six faces of an axis-aligned box, sampled every 4 mm.
+void add_box(std::vector<Eigen::Vector3f>& pts, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+  for (int axis = 0; axis < 3; ++axis) {
+    const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+    for (float s = lo[a]; s <= hi[a]; s += 0.004f)
+      for (float t = lo[b]; t <= hi[b]; t += 0.004f)
+        for (float face : {lo[axis], hi[axis]}) {
+          Eigen::Vector3f p;
+          p[axis] = face;
+          p[a] = s;
+          p[b] = t;
+          pts.push_back(p);
+        }
+  }
+}
+
+TEST(Planes, FindsTheTableAtItsDistanceAndNormalAndKeepsTheBoxes) {
+  std::vector<Eigen::Vector3f> pts = table_points();
+  std::mt19937 rng(3);
+  std::normal_distribution<float> noise(0.0f, 0.002f);
+  for (auto& p : pts) p.z() += noise(rng);
+  const std::size_t table = pts.size();
+  add_box(pts, {-0.3f, -0.3f, 0.7f}, {-0.1f, -0.1f, 0.85f});
+  add_box(pts, {0.1f, 0.1f, 0.6f}, {0.25f, 0.3f, 0.8f});  // flat faces of 15-20 cm: not "large"
+  const PlaneRemoval r = remove_large_planes(PointCloud::from_points(pts));
+  ASSERT_EQ(r.removed.size(), 1u);
+  const Plane& p = r.removed[0];
+  const Eigen::Vector3f n_true = Eigen::Vector3f(0, 0.5f, 1).normalized();
+  EXPECT_LT(std::acos(std::abs(p.coefficients.head<3>().dot(n_true))) * 180 / std::numbers::pi, 0.5);
+  // Distance of the plane from the camera: 1.2 / |(0, 0.5, 1)| = 1.0733 m.
+  EXPECT_NEAR(std::abs(p.coefficients[3]), 1.2 / std::sqrt(1.25), 0.001);
+  EXPECT_GT(p.coefficients.head<3>().dot(-Eigen::Vector3f(0, 0, 1.2f)), 0) << "normal faces the camera";
+  EXPECT_GT(p.inliers.size(), table * 98 / 100);
+  EXPECT_GT(r.remaining.size(), (pts.size() - table) * 9 / 10);  // the boxes stay
+}
+
+TEST(Clusters, SeparatedBoxesAreSeparateClustersInBothVersions) {
+  // Three boxes 5 cm apart, rendered as a depth frame so that the organized version can run too.
+  const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
+  const TriangleMesh box = make_box_mesh({0.1f, 0.1f, 0.1f});
+  const MeshInstance boxes[] = {{&box, make_transform(Eigen::Matrix3d::Identity(), {-0.15, 0, 1.0})},
+                                {&box, make_transform(Eigen::Matrix3d::Identity(), {0.0, 0, 1.0})},
+                                {&box, make_transform(Eigen::Matrix3d::Identity(), {0.15, 0.05, 1.1})}};
+  const PointCloud frame = depth_to_cloud(render(boxes, K).depth, K);
+  std::vector<std::uint32_t> all;
+  for (std::size_t i = 0; i < frame.size(); ++i) if (frame.points[i].allFinite()) all.push_back(static_cast<std::uint32_t>(i));
+  const auto by_tree = euclidean_clusters(frame, all);
+  const auto by_grid = organized_clusters(frame, all);
+  ASSERT_EQ(by_tree.size(), 3u);
+  ASSERT_EQ(by_grid.size(), 3u);
+  for (std::size_t c = 0; c < 3; ++c) EXPECT_EQ(by_tree[c], by_grid[c]);
+  // And two boxes 1 cm apart merge at the 2 cm tolerance: the limit the thesis accepted. (Centres
+  // at +-5.53 cm rather than +-5.5: at 5.5 one pixel column's ray grazes the far edge of a box's
+  // inner face, exactly, and that one-pixel strip 10 cm back is a cluster of its own.)
+  const MeshInstance close[] = {{&box, make_transform(Eigen::Matrix3d::Identity(), {-0.0553, 0, 1.0})},
+                                {&box, make_transform(Eigen::Matrix3d::Identity(), {0.0553, 0, 1.0})}};
+  const PointCloud pair = depth_to_cloud(render(close, K).depth, K);
+  std::vector<std::uint32_t> both;
+  for (std::size_t i = 0; i < pair.size(); ++i) if (pair.points[i].allFinite()) both.push_back(static_cast<std::uint32_t>(i));
+  EXPECT_EQ(euclidean_clusters(pair, both).size(), 1u);
+}
+
+TEST(Normals, SphereNormalsAreRadialWithinTwoDegrees) {
+  // A 10 cm sphere seen from 0.6 m, rendered and unprojected: normals point out of its centre.
+  TriangleMesh sphere;
+  const int rings = 90, around = 180;
+  for (int i = 0; i <= rings; ++i)
+    for (int j = 0; j < around; ++j) {
+      const double th = std::numbers::pi * i / rings, ph = 2 * std::numbers::pi * j / around;
+      sphere.vertices.emplace_back(static_cast<float>(0.1 * std::sin(th) * std::cos(ph)),
+                                   static_cast<float>(0.1 * std::sin(th) * std::sin(ph)), static_cast<float>(0.1 * std::cos(th)));
+    }
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < around; ++j) {
+      const auto a = static_cast<std::uint32_t>(i * around + j), b = static_cast<std::uint32_t>(i * around + (j + 1) % around);
+      sphere.triangles.push_back({a, b, b + around});
+      sphere.triangles.push_back({a, b + around, a + around});
+    }
+  const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
+  const Eigen::Vector3f centre(0, 0, 0.6f);
+  const MeshInstance inst{&sphere, make_transform(Eigen::Matrix3d::Identity(), centre.cast<double>())};
+  PointCloud organized = depth_to_cloud(render(std::span(&inst, 1), K).depth, K);
+  PointCloud voxels = voxel_downsample(organized, 0.003f);
+  estimate_normals(voxels);
+  estimate_normals_organized(organized);
+  for (const PointCloud* c : {&voxels, &organized}) {
+    int checked = 0;
+    for (std::size_t i = 0; i < c->size(); ++i) {
+      const Eigen::Vector3f& p = c->points[i];
+      const Eigen::Vector3f& n = c->normals[i];
+      if (!p.allFinite() || !n.allFinite()) continue;
+      const Eigen::Vector3f radial = (p - centre).normalized();
+      if (radial.dot(-centre.normalized()) < 0.3f) continue;  // skip the rim, where neighbours are one-sided
+      ASSERT_LT(std::acos(std::clamp(n.dot(radial), -1.0f, 1.0f)) * 180 / std::numbers::pi, 2.0) << p.transpose();
+      ++checked;
+    }
+    EXPECT_GT(checked, 2000);
+  }
+  // Curvature of a sphere sampled over 1.5 cm is small but not zero; of a plane, zero.
+  EXPECT_GT(voxels.curvature[voxels.size() / 2], 0.0f);
+}
+
+TEST(Normals, FewerThanThreeNeighboursGiveNaN) {
+  PointCloud c = PointCloud::from_points({{0, 0, 1}, {0.001f, 0, 1}, {1, 1, 1}});
+  estimate_normals(c);
+  for (const auto& n : c.normals) EXPECT_FALSE(n.allFinite());
+}
+
+// mOSD (real Kinect frames with per-point object labels): label 20-29 is object 2, 30-39 object 3...
+TEST(RealData, MosdClustersMatchEveryObjectThatTouchesNoOther) {
+  VIEWPOSE_REQUIRE_SHARED_DATA();
+  int isolated = 0, isolated_iou90 = 0, touching = 0;
+  double touching_iou = 0;
+  for (int id : {0, 17, 25, 33, 36, 40, 45, 50, 55, 60}) {
+    SCOPED_TRACE(id);
+    const PointCloud frame = read_pcd(test::shared_data() / fmt::format("pcl_mosd/test/test{}.pcd", id)).cloud;
+    const Segmentation seg = segment_scene(frame);
+    ASSERT_GE(seg.planes.size(), 1u) << "the table";
+    std::map<int, std::vector<std::uint32_t>> objects;
+    for (std::size_t i = 0; i < seg.points.size(); ++i) {
+      if (seg.points.labels[i] >= 20) objects[static_cast<int>(seg.points.labels[i] / 10)].push_back(static_cast<std::uint32_t>(i));
+    }
+    // The table (labels 1-9) is gone: almost none of it is left in a cluster.
+    std::size_t table_in_clusters = 0, clustered = 0;
+    for (const auto& c : seg.clusters) {
+      for (std::uint32_t i : c) table_in_clusters += seg.points.labels[i] < 20 ? 1 : 0;
+      clustered += c.size();
+    }
+    EXPECT_LT(table_in_clusters, clustered / 50 + 20);
+    for (const auto& [obj, idx] : objects) {
+      // Touching: within the 2 cm clustering tolerance of another object's points.
+      std::vector<Eigen::Vector3f> mine;
+      for (std::uint32_t i : idx) mine.push_back(seg.points.points[i]);
+      const KdTree tree(mine);
+      bool touches = false;
+      for (const auto& [other, oidx] : objects) {
+        if (other == obj) continue;
+        for (std::uint32_t j : oidx) {
+          std::uint32_t k;
+          float d2;
+          if (tree.nearest(seg.points.points[j], k, d2) && d2 < 0.02f * 0.02f) touches = true;
+        }
+      }
+      // Every cluster holding this object's points, its purity, and the object's coverage.
+      std::size_t covered = 0;
+      double best_iou = 0;
+      for (const auto& c : seg.clusters) {
+        std::size_t inter = 0;
+        for (std::uint32_t i : c) inter += (seg.points.labels[i] >= 20 && static_cast<int>(seg.points.labels[i] / 10) == obj) ? 1 : 0;
+        if (inter == 0) continue;
+        covered += inter;
+        best_iou = std::max(best_iou, static_cast<double>(inter) / static_cast<double>(idx.size() + c.size() - inter));
+        if (!touches) {
+          EXPECT_GT(static_cast<double>(inter) / static_cast<double>(c.size()), 0.95) << "object " << obj << " merged";
+        }
+      }
+      if (touches) {
+        ++touching;
+        touching_iou += best_iou;
+        continue;
+      }
+      ++isolated;
+      isolated_iou90 += best_iou >= 0.9 ? 1 : 0;
+      EXPECT_GT(static_cast<double>(covered) / static_cast<double>(idx.size()), 0.9) << "object " << obj << " lost";
+    }
+  }
+  // Measured (docs/RESULTS.md): 16 of 18 isolated objects in one cluster at IoU >= 0.9; the other
+  // two are split in two by an occluder in front, not merged. Touching objects merge.
+  std::printf("mOSD: isolated objects %d, of which %d at IoU >= 0.9; touching objects %d, mean best IoU %.2f\n", isolated,
+              isolated_iou90, touching, touching_iou / std::max(touching, 1));
+  EXPECT_EQ(isolated, 18);
+  EXPECT_GE(isolated_iou90, 16);
+}
+
+}  // namespace
+}  // namespace viewpose
