@@ -7,15 +7,14 @@
 #include <vector>
 
 #include <fmt/format.h>
-#include <spdlog/spdlog.h>
 
 #include "camera_flags.hpp"
 #include "commands.hpp"
+#include "model_args.hpp"
 #include "progress.hpp"
 #include "viewpose/core/error.hpp"
 #include "viewpose/io/bop.hpp"
 #include "viewpose/io/image_png.hpp"
-#include "viewpose/io/mesh_loader.hpp"
 #include "viewpose/render/shapes.hpp"
 #include "viewpose/simulate/bop_writer.hpp"
 #include "viewpose/visualize/image.hpp"
@@ -26,22 +25,7 @@ namespace fs = std::filesystem;
 
 std::vector<SimObject> load_objects(const std::vector<std::string>& models, LengthUnit unit) {
   std::vector<SimObject> objects;
-  const auto names = shape_names();
-  for (const std::string& m : models) {
-    SimObject o;
-    o.obj_id = static_cast<int>(objects.size()) + 1;
-    if (std::find(names.begin(), names.end(), m) != names.end()) {
-      o.name = m;
-      o.mesh = make_named_shape(m);
-    } else {
-      LoadedMesh loaded = load_mesh(m, unit);
-      for (const auto& w : loaded.warnings) spdlog::warn("{}", w);
-      o.name = fs::path(m).stem().string();
-      o.mesh = std::move(loaded.mesh);
-      centre_on_bounding_box(o.mesh);
-    }
-    objects.push_back(std::move(o));
-  }
+  for (ObjectModel& m : load_models(models, unit)) objects.push_back({m.id, m.name, std::move(m.mesh)});
   return objects;
 }
 

@@ -61,6 +61,17 @@ expect_in("${ERR}" "exactly one --model")
 run(FALSE simulate --model "${WORK}/no-such-mesh.obj" -o "${WORK}/y")
 expect_in("${ERR}" "no-such-mesh.obj: no such file")
 
+# A view database from built-in shapes, and its summary.
+run(TRUE db build jug can --views 20 -o "${WORK}/objects.vpdb")
+expect_in("${OUT}" "id    2  can")
+run(TRUE db info "${WORK}/objects.vpdb")
+expect_in("${OUT}" "views:     40 (20 per object")
+file(WRITE "${WORK}/bad.vpdb" "VPDB but not really")
+run(FALSE db info "${WORK}/bad.vpdb")
+expect_in("${ERR}" "bad.vpdb: not a viewpose view database")
+run(FALSE db build -o "${WORK}/none.vpdb")
+expect_in("${ERR}" "no objects")
+
 # Bad input: one line on stderr naming the file, non-zero exit, and the good files still reported.
 run(FALSE info "${WORK}/missing.pcd")
 expect_in("${ERR}" "viewpose: error: ${WORK}/missing.pcd: no such file")

@@ -1,0 +1,112 @@
+#include <cstring>
+
+#include "test_support.hpp"
+#include "viewpose/core/error.hpp"
+#include "viewpose/database/matching.hpp"
+#include "viewpose/database/view_database.hpp"
+#include "viewpose/io/file.hpp"
+#include "viewpose/render/rasterizer.hpp"
+#include "viewpose/render/shapes.hpp"
+
+namespace viewpose {
+namespace {
+
+using test::expect_error;
+
+// Built once: the jug and a can from a 20-view sphere (fast enough for the sanitizer build).
+const ViewDatabase& small_db() {
+  static const ViewDatabase db = [] {
+    const std::vector<ObjectModel> models = {{1, "jug", make_jug()}, {5, "can", make_can()}};
+    DatabaseParams p;
+    p.subdivisions = 0;
+    return build_view_database(models, p);
+  }();
+  return db;
+}
+
+TEST(ViewDatabaseTest, HoldsEveryViewOfEveryObjectWithItsPose) {
+  const ViewDatabase& db = small_db();
+  ASSERT_EQ(db.objects.size(), 2u);
+  EXPECT_EQ(db.objects[1].id, 5);
+  EXPECT_NEAR(db.objects[0].diameter_m, mesh_diameter(make_jug()), 1e-9);
+  ASSERT_EQ(db.views.size(), 40u);
+  for (const ViewEntry& v : db.views) {
+    EXPECT_GT(v.points.size(), 300u);
+    EXPECT_EQ(v.normals.size(), v.points.size());
+    EXPECT_LT(v.icp_points.size(), v.points.size());  // the 5 mm copy is coarser
+    EXPECT_NEAR(v.T_view_object.translation().norm(), 1.0, 0.02);  // 1 m from the object's centre
+    float sum = 0;
+    for (float b : v.vfh) sum += b;
+    EXPECT_NEAR(sum, 400.0f, 2.0f);  // three angle histograms of ~100 and the viewpoint part's 100
+  }
+}
+
+TEST(ViewDatabaseTest, ARenderedViewDescribesToItsEntryAndMatchesItselfFirst) {
+  // The same describe code for views and scenes: re-rendering a view at its stored pose and
+  // describing it gives the stored VFH, and the view is its own nearest match.
+  const ViewDatabase& db = small_db();
+  const std::vector<ObjectModel> models = {{1, "jug", make_jug()}, {5, "can", make_can()}};
+  for (std::size_t i = 0; i < db.views.size(); i += 3) {
+    const ViewEntry& stored = db.views[i];
+    const MeshInstance inst{&models[stored.object].mesh, stored.T_view_object};
+    const RenderedFrame frame = render(std::span(&inst, 1), db.params.camera);
+    const ViewEntry again = describe_view(frame.depth, stored.T_view_object, stored.object, db.params);
+    EXPECT_EQ(std::memcmp(again.vfh.data(), stored.vfh.data(), sizeof(Vfh)), 0) << "view " << i;
+    const auto matches = nearest_views(db, again.vfh, 5);
+    ASSERT_EQ(matches.size(), 5u);
+    EXPECT_EQ(matches[0].distance, 0.0f);
+    if (models[stored.object].name == "jug") {
+      EXPECT_EQ(matches[0].view, i);  // no other view of the jug looks the same
+    } else {
+      // A can looks the same from several azimuths: an equivalent view may tie with it.
+      EXPECT_EQ(db.views[matches[0].view].object, stored.object);
+    }
+    EXPECT_LE(matches[0].distance, matches[1].distance);
+  }
+}
+
+TEST(ViewDatabaseTest, SurvivesAWriteReadRoundTripBitForBit) {
+  const ViewDatabase& db = small_db();
+  test::TempDir dir;
+  db.save(dir / "db.vpdb");
+  const ViewDatabase back = ViewDatabase::load(dir / "db.vpdb");
+  EXPECT_EQ(back.serialize(), db.serialize());
+  ASSERT_EQ(back.views.size(), db.views.size());
+  EXPECT_TRUE(back.views[7].T_view_object.isApprox(db.views[7].T_view_object, 0.0));
+  EXPECT_EQ(back.objects[1].name, "can");
+  EXPECT_EQ(back.params.subdivisions, 0);
+  EXPECT_EQ(back.params.describe.vfh.pcl_compatible, db.params.describe.vfh.pcl_compatible);
+}
+
+TEST(ViewDatabaseTest, DamagedOrForeignFilesAreRefusedWithAClearError) {
+  const std::vector<std::uint8_t> good = small_db().serialize();
+  auto with = [&](auto&& edit) {
+    std::vector<std::uint8_t> b = good;
+    edit(b);
+    return b;
+  };
+  expect_error([&] { ViewDatabase::deserialize({}, "empty.vpdb"); }, "empty.vpdb: not a viewpose view database");
+  expect_error([&] { ViewDatabase::deserialize(test::to_bytes("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\n"), "a.vpdb"); },
+               "not a viewpose view database");
+  expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { b[8] = 2; }), "v2.vpdb"); },
+               "database format version 2, this viewpose reads version 1; rebuild it");
+  expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { std::swap(b[12], b[15]); }), "be.vpdb"); }, "byte order");
+  expect_error([&] { ViewDatabase::deserialize(std::span(good.data(), good.size() / 2), "half.vpdb"); }, "truncated or padded");
+  expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { b[b.size() / 2] ^= 0x40; }), "flip.vpdb"); },
+               "checksum mismatch");
+  test::TempDir dir;
+  expect_error([&] { ViewDatabase::load(dir / "missing.vpdb"); }, "missing.vpdb: no such file");
+}
+
+TEST(Matching, ChiSquaredDistance) {
+  Vfh a{}, b{};
+  a[0] = 3;
+  b[0] = 1;  // (3-1)^2 / 4 = 1
+  a[10] = 2;  // (2-0)^2 / 2 = 2
+  EXPECT_FLOAT_EQ(chi_squared(a, b), 3.0f);
+  EXPECT_FLOAT_EQ(chi_squared(a, a), 0.0f);
+  EXPECT_FLOAT_EQ(chi_squared(a, b), chi_squared(b, a));
+}
+
+}  // namespace
+}  // namespace viewpose
