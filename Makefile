@@ -6,12 +6,13 @@
 #   make fuzz           build the libFuzzer targets (clang) and run each for FUZZ_SECONDS
 #   make check          all three, as CI runs them
 #   make bench          micro-benchmarks of each stage
+#   make pcl-fixtures   install PCL, and regenerate tests/fixtures/pcl from PCL's own code
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 FUZZ_SECONDS ?= 60
 BUILD := build
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-sanitize fuzz check bench clean
+.PHONY: all deps build demo test test-sanitize fuzz check bench pcl-fixtures clean
 
 all: build
 
@@ -44,5 +45,13 @@ check: test test-sanitize fuzz
 bench: build
 	@./$(BUILD)/viewpose_bench
 
+pcl-fixtures: build
+	@scripts/install-deps.sh pcl
+	@cmake -S tools/pcl_reference -B build-pcl -DCMAKE_BUILD_TYPE=Release >/dev/null
+	@cmake --build build-pcl -j $(JOBS)
+	@mkdir -p tests/fixtures/pcl
+	@./$(BUILD)/tests/make_pcl_input tests/fixtures/jug_view.pcd
+	@./build-pcl/pcl_reference tests/fixtures/jug_view.pcd tests/fixtures/pcl
+
 clean:
-	rm -rf build build-sanitize build-fuzz demo-out
+	rm -rf build build-sanitize build-fuzz build-pcl demo-out

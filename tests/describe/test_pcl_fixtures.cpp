@@ -4,6 +4,7 @@
 
 #include "test_support.hpp"
 #include "viewpose/describe/crh.hpp"
+#include "viewpose/describe/normals.hpp"
 #include "viewpose/describe/vfh.hpp"
 #include "viewpose/io/pcd.hpp"
 
@@ -127,6 +128,49 @@ TEST(CrhAlignment, FoundRollCarriesTheViewOntoARolledScene) {
     worst = std::max(worst, (T * p.cast<double>() - T_scene_view * p.cast<double>()).norm());
   }
   EXPECT_LT(worst, 0.01) << "roll " << rolls[0];  // 2-degree steps over a 15 cm carton: a few mm
+}
+
+// A rendered view of the built-in jug (tests/fixtures/jug_view.pcd, made by viewpose) and PCL
+// 1.13's VFH, CRH and normals on it (tests/fixtures/pcl, made by `make pcl-fixtures`, which builds
+// tools/pcl_reference against Debian's libpcl-dev). Committed, so this runs without PCL.
+std::vector<float> repo_fixture(const std::string& name) {
+  std::ifstream in(std::filesystem::path(VIEWPOSE_SOURCE_DIR) / "tests/fixtures" / name);
+  std::vector<float> v;
+  float x;
+  while (in >> x) v.push_back(x);
+  return v;
+}
+
+TEST(PclRenderedView, VfhCrhAndNormalsEqualPcls) {
+  const PointCloud view = read_pcd(std::filesystem::path(VIEWPOSE_SOURCE_DIR) / "tests/fixtures/jug_view.pcd").cloud;
+  ASSERT_GT(view.size(), 5000u);
+  ASSERT_TRUE(view.has_normals());
+  const Vfh vfh = compute_vfh(view.points, view.normals);
+  const auto pcl_vfh = repo_fixture("pcl/vfh_framework.txt");
+  ASSERT_EQ(pcl_vfh.size(), 308u);
+  for (std::size_t i = 0; i < 308; ++i) EXPECT_NEAR(vfh[i], pcl_vfh[i], 1e-5f * std::max(1.0f, pcl_vfh[i])) << "bin " << i;
+
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+  for (const auto& p : view.points) centroid += p;
+  centroid /= static_cast<float>(view.size());
+  const Crh crh = compute_crh(view.normals, centroid);
+  const auto pcl_crh = repo_fixture("pcl/crh.txt");
+  ASSERT_EQ(pcl_crh.size(), 90u);
+  for (std::size_t i = 0; i < 90; ++i) EXPECT_NEAR(crh[i], pcl_crh[i], 1e-5f) << "coefficient " << i;
+
+  // Normals from the points alone (radius 1.5 cm), ours and PCL's NormalEstimation.
+  PointCloud points = PointCloud::from_points(view.points);
+  estimate_normals(points);
+  const auto pcl_n = repo_fixture("pcl/normals_pcl.txt");
+  ASSERT_EQ(pcl_n.size(), 3 * view.size());
+  double worst = 0;
+  for (std::size_t i = 0; i < view.size(); ++i) {
+    const Eigen::Vector3f theirs(pcl_n[3 * i], pcl_n[3 * i + 1], pcl_n[3 * i + 2]);
+    ASSERT_EQ(theirs.allFinite(), points.normals[i].allFinite()) << i;
+    if (!theirs.allFinite()) continue;
+    worst = std::max(worst, std::acos(std::clamp(static_cast<double>(theirs.dot(points.normals[i])), -1.0, 1.0)));
+  }
+  EXPECT_LT(worst * 180 / M_PI, 0.05);
 }
 
 }  // namespace
