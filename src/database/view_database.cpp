@@ -138,6 +138,13 @@ std::vector<std::uint8_t> ViewDatabase::serialize() const {
     w.put(static_cast<std::int32_t>(o.id));
     w.put_string(o.name);
     w.put(o.diameter_m);
+    w.put_points(o.mesh.vertices);
+    w.put(static_cast<std::uint32_t>(o.mesh.triangles.size()));
+    for (const auto& t : o.mesh.triangles) {
+      for (std::uint32_t i : t) w.put(i);
+    }
+    w.put_points(o.model_points);
+    w.put_points(o.model_normals);
   }
   w.put(static_cast<std::uint32_t>(views.size()));
   for (const auto& v : views) {
@@ -195,6 +202,19 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
     o.id = r.get<std::int32_t>();
     o.name = r.get_string();
     o.diameter_m = r.get<double>();
+    o.mesh.vertices = r.get_points();
+    const auto n_triangles = r.get<std::uint32_t>();
+    r.need_records(n_triangles, 12);
+    o.mesh.triangles.resize(n_triangles);
+    for (auto& t : o.mesh.triangles) {
+      for (auto& vertex : t) {
+        vertex = r.get<std::uint32_t>();
+        if (vertex >= o.mesh.vertices.size()) r.fail("a triangle names a vertex that does not exist");
+      }
+    }
+    o.model_points = r.get_points();
+    o.model_normals = r.get_points();
+    if (o.model_normals.size() != o.model_points.size()) r.fail("an object's model normals do not match its points");
     db.objects.push_back(std::move(o));
   }
   const auto n_views = r.get<std::uint32_t>();
@@ -248,7 +268,13 @@ ViewDatabase build_view_database(std::span<const ObjectModel> objects, const Dat
   for (std::size_t o = 0; o < objects.size(); ++o) {
     const TriangleMesh& mesh = objects[o].mesh;
     if (mesh.triangles.empty()) throw Error(fmt::format("db build: object '{}' has no triangles", objects[o].name));
-    db.objects.push_back({objects[o].id, objects[o].name, mesh_diameter(mesh)});
+    DatabaseObject object;
+    object.id = objects[o].id;
+    object.name = objects[o].name;
+    object.diameter_m = mesh_diameter(mesh);
+    object.mesh.vertices = mesh.vertices;
+    object.mesh.triangles = mesh.triangles;
+    db.objects.push_back(std::move(object));
     const BoundingBox box = bounding_box(mesh);
     const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
     const std::vector<Transform> poses = view_sphere_poses(centre, params.distance_m, params.subdivisions);
@@ -258,6 +284,22 @@ ViewDatabase build_view_database(std::span<const ObjectModel> objects, const Dat
     for (std::size_t i = 0; i < poses.size(); ++i) {
       entries[i] = describe_view(frames[i].depth, poses[i], static_cast<std::uint32_t>(o), params);
     }
+    // The model cloud: every view's points carried into the object frame, on one voxel grid. It is
+    // the surface a sensor can see, with outward normals, and ICP aligns scene points to it.
+    PointCloud model;
+    for (const ViewEntry& e : entries) {
+      const Transform T_object_view = e.T_view_object.inverse();
+      const Eigen::Matrix3f R = T_object_view.linear().cast<float>();
+      const Eigen::Vector3f t = T_object_view.translation().cast<float>();
+      for (std::size_t i = 0; i < e.points.size(); ++i) {
+        model.points.push_back(R * e.points[i] + t);
+        model.normals.push_back(R * e.normals[i]);
+      }
+    }
+    model.width = static_cast<int>(model.points.size());
+    PointCloud model_grid = voxel_downsample(model, params.voxel_m);
+    db.objects.back().model_points = std::move(model_grid.points);
+    db.objects.back().model_normals = std::move(model_grid.normals);
     for (auto& e : entries) {
       if (e.points.size() >= 3) db.views.push_back(std::move(e));  // a view that sees nothing is no use
     }

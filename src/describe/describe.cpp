@@ -1,8 +1,16 @@
 #include "viewpose/describe/describe.hpp"
 
+#include <chrono>
+
 namespace viewpose {
 
-Description describe(PointCloud points, const DescribeOptions& options) {
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+}  // namespace
+
+Description describe(PointCloud points, const DescribeOptions& options, DescribeTimes* times) {
+  auto t = Clock::now();
   PointCloud cloud = PointCloud::from_points(std::move(points.points));
   estimate_normals(cloud, options.normals);
   // Keep only points with a normal: they are the ones every later stage can use.
@@ -17,8 +25,13 @@ Description describe(PointCloud points, const DescribeOptions& options) {
   Description d;
   for (const auto& p : kept.points) d.centroid += p;
   if (!kept.points.empty()) d.centroid /= static_cast<float>(kept.points.size());
+  if (times) times->normals_ms += ms_since(t);
+  t = Clock::now();
   d.vfh = compute_vfh(kept.points, kept.normals, options.vfh);
+  if (times) times->vfh_ms += ms_since(t);
+  t = Clock::now();
   d.crh = compute_crh(kept.normals, d.centroid);
+  if (times) times->crh_ms += ms_since(t);
   d.cloud = std::move(kept);
   return d;
 }

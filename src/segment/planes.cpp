@@ -4,10 +4,10 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <unordered_map>
 
 #include <Eigen/Eigenvalues>
 
-#include "viewpose/segment/clusters.hpp"
 
 namespace viewpose {
 
@@ -55,6 +55,15 @@ Plane fit_plane(std::span<const Eigen::Vector3f> points, std::span<const std::ui
   if (indices.size() < 3) return best;
   std::mt19937_64 rng(o.seed);
   std::uniform_int_distribution<std::size_t> pick(0, indices.size() - 1);
+  // Hypotheses are scored on a fixed random subsample (a few thousand points estimate the inlier
+  // share to within a percent); only the winner is counted on every point.
+  constexpr std::size_t kScoreSample = 4000;
+  std::vector<std::uint32_t> sample;
+  if (indices.size() <= kScoreSample) {
+    sample.assign(indices.begin(), indices.end());
+  } else {
+    for (std::size_t k = 0; k < kScoreSample; ++k) sample.push_back(indices[pick(rng)]);
+  }
   std::size_t best_count = 0;
   double needed = o.max_iterations;
   for (int it = 0; it < o.max_iterations && it < needed; ++it) {
@@ -64,12 +73,12 @@ Plane fit_plane(std::span<const Eigen::Vector3f> points, std::span<const std::ui
     n.normalize();
     const Eigen::Vector4f plane(n.x(), n.y(), n.z(), -n.dot(a));
     std::size_t count = 0;
-    for (std::uint32_t i : indices) count += std::abs(n.dot(points[i]) + plane[3]) <= o.distance_threshold_m ? 1 : 0;
+    for (std::uint32_t i : sample) count += std::abs(n.dot(points[i]) + plane[3]) <= o.distance_threshold_m ? 1 : 0;
     if (count > best_count) {
       best_count = count;
       best.coefficients = plane;
       // Samples still needed for 99 % confidence of an all-inlier sample (PCL's RANSAC rule).
-      const double w = static_cast<double>(count) / static_cast<double>(indices.size());
+      const double w = static_cast<double>(count) / static_cast<double>(sample.size());
       const double p_fail = 1.0 - w * w * w;
       needed = p_fail <= 0 ? 0 : std::log(0.01) / std::log(std::max(p_fail, 1e-12));
     }
@@ -89,6 +98,48 @@ std::vector<std::uint32_t> minus(const std::vector<std::uint32_t>& a, const std:
   return out;
 }
 
+// The inliers of the largest connected patch of a plane: the inliers binned into square cells
+// of the plane's own 2-D coordinates, cells joined to their 8 neighbours. Linear time.
+std::vector<std::uint32_t> largest_patch(std::span<const Eigen::Vector3f> points, const Plane& plane, float cell) {
+  const Eigen::Vector3f n = plane.coefficients.head<3>();
+  const Eigen::Vector3f a = (std::abs(n.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY()).cross(n).normalized();
+  const Eigen::Vector3f b = n.cross(a);
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
+  const auto key = [](std::int64_t x, std::int64_t y) {
+    return (static_cast<std::uint64_t>(x + (1 << 30)) << 32) | static_cast<std::uint64_t>(y + (1 << 30));
+  };
+  for (std::uint32_t i : plane.inliers) {
+    cells[key(static_cast<std::int64_t>(std::floor(a.dot(points[i]) / cell)),
+              static_cast<std::int64_t>(std::floor(b.dot(points[i]) / cell)))].push_back(i);
+  }
+  std::unordered_map<std::uint64_t, char> seen;
+  std::vector<std::uint32_t> best, current;
+  std::vector<std::uint64_t> queue;
+  for (const auto& [start, unused] : cells) {
+    if (seen[start]) continue;
+    seen[start] = 1;
+    queue.assign(1, start);
+    current.clear();
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+      const std::uint64_t c = queue[q];
+      const auto& members = cells[c];
+      current.insert(current.end(), members.begin(), members.end());
+      const std::int64_t x = static_cast<std::int64_t>(c >> 32) - (1 << 30), y = static_cast<std::int64_t>(c & 0xffffffffu) - (1 << 30);
+      for (std::int64_t dx = -1; dx <= 1; ++dx)
+        for (std::int64_t dy = -1; dy <= 1; ++dy) {
+          const std::uint64_t k = key(x + dx, y + dy);
+          if (cells.count(k) && !seen[k]) {
+            seen[k] = 1;
+            queue.push_back(k);
+          }
+        }
+    }
+    if (current.size() > best.size()) best.swap(current);
+  }
+  std::sort(best.begin(), best.end());
+  return best;
+}
+
 }  // namespace
 
 PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o) {
@@ -100,9 +151,8 @@ PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o)
   // taken out of the pool, so that a smaller wall behind it can still be found.
   std::vector<std::uint32_t> pool = out.remaining;
   PlaneOptions round = o;
-  ClusterOptions patches;
-  patches.tolerance_m = 2 * o.distance_threshold_m;
-  patches.min_points = 1;
+  // Cells of the inlier band's width: neighbouring cells link points up to about 2.8 cells apart.
+  const float patch_cell = o.distance_threshold_m;
   for (int attempt = 0; attempt < 2 * o.max_planes && static_cast<int>(out.removed.size()) < o.max_planes &&
                         pool.size() >= o.min_inliers;
        ++attempt) {
@@ -111,11 +161,11 @@ PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o)
     if (plane.inliers.size() < o.min_inliers) break;
     // Large means one connected patch spans min_extent in both directions: a table or a wall does;
     // coplanar faces of boxes (apart, or in a row) and object faces do not.
-    const std::vector<Cluster> parts = euclidean_clusters(cloud, plane.inliers, patches);
+    const std::vector<std::uint32_t> patch = largest_patch(cloud.points, plane, patch_cell);
     float patch_extent = 0;
-    refit(cloud.points, parts.front(), patch_extent);
+    refit(cloud.points, patch, patch_extent);
     pool = minus(pool, plane.inliers);
-    if (parts.front().size() < o.min_inliers || patch_extent < o.min_extent_m) continue;
+    if (patch.size() < o.min_inliers || patch_extent < o.min_extent_m) continue;
     plane.extent_m = patch_extent;
     out.remaining = minus(out.remaining, plane.inliers);
     out.removed.push_back(std::move(plane));

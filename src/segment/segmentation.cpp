@@ -2,14 +2,27 @@
 
 #include "viewpose/segment/voxel_grid.hpp"
 
+#include <chrono>
+
 namespace viewpose {
 
-Segmentation segment_scene(const PointCloud& frame, const SegmentOptions& options) {
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+}  // namespace
+
+Segmentation segment_scene(const PointCloud& frame, const SegmentOptions& options, SegmentTimes* times) {
   Segmentation s;
+  auto t = Clock::now();
   s.points = voxel_downsample(frame, options.voxel_m);
+  if (times) times->downsample_ms += ms_since(t);
+  t = Clock::now();
   PlaneRemoval planes = remove_large_planes(s.points, options.planes);
   s.planes = std::move(planes.removed);
+  if (times) times->planes_ms += ms_since(t);
+  t = Clock::now();
   s.clusters = euclidean_clusters(s.points, planes.remaining, options.clusters);
+  if (times) times->clusters_ms += ms_since(t);
   return s;
 }
 

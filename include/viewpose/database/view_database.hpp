@@ -21,6 +21,9 @@ struct DatabaseObject {
   int id = 0;        ///< BOP obj_id, or 1, 2, ... in the order given
   std::string name;
   double diameter_m = 0;
+  TriangleMesh mesh;  ///< metres, object frame: rendered at a hypothesis to verify it
+  std::vector<Eigen::Vector3f> model_points;   ///< the surface the views saw, object frame, voxel grid
+  std::vector<Eigen::Vector3f> model_normals;  ///< outward, one per model point: ICP's target
 };
 
 struct ViewEntry {

@@ -20,7 +20,12 @@ struct Description {
   PointCloud cloud;  ///< the points with their normals (points without a normal are dropped)
 };
 
+/// Milliseconds spent in each part of describe().
+struct DescribeTimes {
+  double normals_ms = 0, vfh_ms = 0, crh_ms = 0;
+};
+
 /// Describes `points` (camera frame, metres; already voxelized as the caller wants).
-Description describe(PointCloud points, const DescribeOptions& options = {});
+Description describe(PointCloud points, const DescribeOptions& options = {}, DescribeTimes* times = nullptr);
 
 }  // namespace viewpose

@@ -21,7 +21,12 @@ struct Segmentation {
   std::vector<Cluster> clusters;  ///< candidate objects (indices into points), largest first
 };
 
-Segmentation segment_scene(const PointCloud& frame, const SegmentOptions& options = {});
+/// Milliseconds spent in each part of segment_scene().
+struct SegmentTimes {
+  double downsample_ms = 0, planes_ms = 0, clusters_ms = 0;
+};
+
+Segmentation segment_scene(const PointCloud& frame, const SegmentOptions& options = {}, SegmentTimes* times = nullptr);
 
 /// The points of one cluster as their own cloud.
 PointCloud cluster_points(const PointCloud& points, const Cluster& cluster);

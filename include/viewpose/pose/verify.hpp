@@ -1,0 +1,48 @@
+#pragma once
+// Hypothesis verification by rendering: the model is drawn at the hypothesized pose into the
+// camera and compared with the observed depth, pixel by pixel, within a tolerance that grows with
+// the sensor's noise at that depth.
+//   inlier:   the observed surface is where the model says it is
+//   conflict: the observed surface is *behind* the model: the camera sees through where the model
+//             would be (free space), which a correct pose cannot explain
+//   occluded: the observed surface is in front of the model: something hides it; no evidence
+//   unknown:  no measurement at that pixel; no evidence
+// and the scene cluster must be explained by the model in turn. These are the cues PCL's GHV meant
+// to weigh (explained scene points, visible model outliers, clutter, occlusion), for one
+// hypothesis at a time, without GHV's inverted normal filter.
+#include <span>
+
+#include "viewpose/core/camera.hpp"
+#include "viewpose/core/depth_image.hpp"
+#include "viewpose/core/mesh.hpp"
+#include "viewpose/core/transform.hpp"
+
+namespace viewpose {
+
+struct VerifyOptions {
+  float base_tolerance_m = 0.005f;  ///< tolerance = base + noise_factor * sensor sigma at that depth
+  float noise_factor = 2.5f;
+  int edge_margin_px = 2;           ///< model pixels this close to its outline or a depth step are not judged
+  double min_inlier_fraction = 0.7;    ///< of the model's judged pixels that are not occluded
+  double max_conflict_fraction = 0.15;
+  double min_cluster_explained = 0.7;  ///< of the scene cluster's points
+  std::size_t min_inliers = 150;
+};
+
+struct Verification {
+  bool accepted = false;
+  double score = 0;  ///< inlier fraction x cluster explained, in [0, 1]
+  double inlier_fraction = 0;
+  double conflict_fraction = 0;
+  double cluster_explained = 0;
+  std::size_t inliers = 0, conflicts = 0, occluded = 0, unknown = 0;
+};
+
+/// Tolerance (m) at depth z: base + factor * Kinect sigma(z).
+float depth_tolerance(float z_m, const VerifyOptions& options);
+
+Verification verify_pose(const TriangleMesh& mesh, const Transform& T_camera_object, const DepthImage& observed,
+                         const CameraIntrinsics& K, std::span<const Eigen::Vector3f> cluster_points,
+                         const VerifyOptions& options = {});
+
+}  // namespace viewpose

@@ -1,0 +1,68 @@
+#include "viewpose/pose/icp.hpp"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
+namespace viewpose {
+
+IcpTarget::IcpTarget(std::vector<Eigen::Vector3f> p, std::vector<Eigen::Vector3f> n)
+    : points(std::move(p)), normals(std::move(n)), tree(points) {}
+
+IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> source, const IcpTarget& target,
+                             const Transform& T_initial, const IcpOptions& o) {
+  IcpResult result;
+  result.T_target_source = T_initial;
+  if (source.empty() || target.points.empty()) return result;
+  for (std::size_t stage = 0; stage < o.max_correspondence_m.size(); ++stage) {
+    const float max_d = o.max_correspondence_m[stage];
+    const float max_d2 = max_d * max_d;
+    bool converged = false;
+    for (int it = 0; it < o.max_iterations_per_stage; ++it) {
+      ++result.iterations;
+      // Gauss-Newton on r = n . (T s - q), with T perturbed by a small twist (omega, v) on the left.
+      Eigen::Matrix<double, 6, 6> JtJ = Eigen::Matrix<double, 6, 6>::Zero();
+      Eigen::Matrix<double, 6, 1> Jtr = Eigen::Matrix<double, 6, 1>::Zero();
+      std::size_t count = 0;
+      double sum_r2 = 0;
+      const Eigen::Matrix3f R = result.T_target_source.linear().cast<float>();
+      const Eigen::Vector3f t = result.T_target_source.translation().cast<float>();
+      for (const Eigen::Vector3f& s : source) {
+        if (!s.allFinite()) continue;
+        const Eigen::Vector3f p = R * s + t;
+        std::uint32_t k;
+        float d2;
+        if (!target.tree.nearest(p, k, d2) || d2 > max_d2) continue;
+        const Eigen::Vector3d n = target.normals[k].cast<double>();
+        if (!n.allFinite()) continue;
+        const Eigen::Vector3d pd = p.cast<double>();
+        const double r = n.dot(pd - target.points[k].cast<double>());
+        Eigen::Matrix<double, 6, 1> J;
+        J << pd.cross(n), n;
+        JtJ.noalias() += J * J.transpose();
+        Jtr.noalias() += J * r;
+        sum_r2 += r * r;
+        ++count;
+      }
+      result.fitness = static_cast<double>(count) / static_cast<double>(source.size());
+      result.inlier_rmse = count ? std::sqrt(sum_r2 / static_cast<double>(count)) : 0.0;
+      if (count < o.min_correspondences) return result;  // lost: not converged
+      const Eigen::Matrix<double, 6, 1> x = JtJ.ldlt().solve(-Jtr);
+      if (!x.allFinite()) return result;
+      const Eigen::Vector3d omega = x.head<3>(), v = x.tail<3>();
+      Transform step = Transform::Identity();
+      if (omega.norm() > 0) step.linear() = Eigen::AngleAxisd(omega.norm(), omega.normalized()).toRotationMatrix();
+      step.translation() = v;
+      result.T_target_source = step * result.T_target_source;
+      if (v.norm() < o.convergence_translation_m && omega.norm() < o.convergence_rotation_rad) {
+        converged = true;
+        break;
+      }
+    }
+    result.converged = converged;
+  }
+  return result;
+}
+
+}  // namespace viewpose

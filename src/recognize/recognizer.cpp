@@ -1,0 +1,91 @@
+#include "viewpose/recognize/recognizer.hpp"
+
+#include <chrono>
+
+#include <fmt/format.h>
+
+#include "viewpose/core/error.hpp"
+#include "viewpose/database/matching.hpp"
+#include "viewpose/segment/voxel_grid.hpp"
+
+namespace viewpose {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+}  // namespace
+
+Recognizer::Recognizer(const ViewDatabase& db, RecognizerOptions options) : db_(db), options_(std::move(options)) {
+  if (db.views.empty()) throw Error("recognize: the view database holds no views");
+  for (const DatabaseObject& o : db.objects) {
+    targets_.push_back(std::make_unique<IcpTarget>(o.model_points, o.model_normals));
+    largest_diameter_m_ = std::max(largest_diameter_m_, o.diameter_m);
+  }
+  // Scenes are described at the database's resolution, so that their VFHs are comparable.
+  options_.segment.voxel_m = db.params.voxel_m;
+}
+
+Recognizer::~Recognizer() = default;
+
+Recognition Recognizer::recognize(const Frame& frame) const {
+  const auto start = Clock::now();
+  Recognition out;
+  SegmentTimes seg_times;
+  const Segmentation seg = segment_scene(frame.cloud, options_.segment, &seg_times);
+  out.times.downsample_ms = seg_times.downsample_ms;
+  out.times.segment_ms = seg_times.planes_ms + seg_times.clusters_ms;
+  out.clusters = seg.clusters.size();
+  for (const Cluster& cluster : seg.clusters) {
+    PointCloud points = cluster_points(seg.points, cluster);
+    if (bounding_box(points.points).diagonal() > options_.max_cluster_size_factor * largest_diameter_m_) continue;
+    DescribeTimes dt;
+    const Description d = describe(points, db_.params.describe, &dt);
+    out.times.normals_ms += dt.normals_ms;
+    out.times.vfh_ms += dt.vfh_ms;
+    out.times.crh_ms += dt.crh_ms;
+    if (d.cloud.size() < 3) continue;
+    auto t = Clock::now();
+    const std::vector<Match> matches = nearest_views(db_, d.vfh, options_.matches);
+    out.times.match_ms += ms_since(t);
+    const std::vector<Eigen::Vector3f> icp_source = voxel_downsample(d.cloud, options_.icp_voxel_m).points;
+
+    std::optional<Detection> best;
+    for (std::size_t rank = 0; rank < matches.size() && !(best && !options_.keep_best); ++rank) {
+      const ViewEntry& view = db_.views[matches[rank].view];
+      const DatabaseObject& object = db_.objects[view.object];
+      t = Clock::now();
+      const std::vector<float> rolls = crh_roll_angles(view.crh, d.crh, options_.roll);
+      out.times.crh_ms += ms_since(t);
+      for (const float roll : rolls) {
+        const Transform T0 = crh_alignment(view.centroid.cast<double>(), d.centroid.cast<double>(), roll) * view.T_view_object;
+        t = Clock::now();
+        const IcpResult icp = icp_point_to_plane(icp_source, *targets_[view.object], T0.inverse(), options_.icp);
+        out.times.icp_ms += ms_since(t);
+        const Transform T = icp.T_target_source.inverse();
+        t = Clock::now();
+        const Verification v = verify_pose(object.mesh, T, frame.depth, frame.K, d.cloud.points, options_.verify);
+        out.times.verify_ms += ms_since(t);
+        ++out.hypotheses;
+        if (!v.accepted || (best && best->score >= v.score)) continue;
+        Detection det;
+        det.object_id = object.id;
+        det.object_name = object.name;
+        det.T_camera_object = T;
+        det.score = v.score;
+        det.icp_fitness = icp.fitness;
+        det.icp_rmse_m = icp.inlier_rmse;
+        det.match_rank = static_cast<int>(rank);
+        det.roll_deg = roll;
+        det.cluster_points = d.cloud.size();
+        det.verification = v;
+        best = det;
+        if (!options_.keep_best) break;
+      }
+    }
+    if (best) out.detections.push_back(*best);
+  }
+  out.times.total_ms = ms_since(start);
+  return out;
+}
+
+}  // namespace viewpose
