@@ -13,6 +13,8 @@ void add_info_command(CLI::App& app, int& exit_code);
 void add_demo_command(CLI::App& app, int& exit_code);
 void add_simulate_command(CLI::App& app, int& exit_code);
 void add_db_command(CLI::App& app, int& exit_code);
+void add_recognize_command(CLI::App& app, int& exit_code);
+void add_bop_command(CLI::App& app, int& exit_code);
 
 /// Prints what inspect_file found, as `viewpose info` shows it.
 void print_file_info(const std::filesystem::path& path, const FileInfo& info);

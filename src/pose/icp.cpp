@@ -61,6 +61,10 @@ IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> source, const IcpT
       }
     }
     result.converged = converged;
+    if (stage == 0 && result.fitness < o.min_fitness_after_first_stage) {
+      result.converged = false;
+      return result;
+    }
   }
   return result;
 }

@@ -1,6 +1,7 @@
 #include "viewpose/recognize/recognizer.hpp"
 
 #include <chrono>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -45,7 +46,7 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     out.times.crh_ms += dt.crh_ms;
     if (d.cloud.size() < 3) continue;
     auto t = Clock::now();
-    const std::vector<Match> matches = nearest_views(db_, d.vfh, options_.matches);
+    const std::vector<Match> matches = nearest_views_per_object(db_, d.vfh, options_.matches);
     out.times.match_ms += ms_since(t);
     const std::vector<Eigen::Vector3f> icp_source = voxel_downsample(d.cloud, options_.icp_voxel_m).points;
 
@@ -61,11 +62,12 @@ Recognition Recognizer::recognize(const Frame& frame) const {
         t = Clock::now();
         const IcpResult icp = icp_point_to_plane(icp_source, *targets_[view.object], T0.inverse(), options_.icp);
         out.times.icp_ms += ms_since(t);
+        ++out.hypotheses;
+        if (icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
         const Transform T = icp.T_target_source.inverse();
         t = Clock::now();
         const Verification v = verify_pose(object.mesh, T, frame.depth, frame.K, d.cloud.points, options_.verify);
         out.times.verify_ms += ms_since(t);
-        ++out.hypotheses;
         if (!v.accepted || (best && best->score >= v.score)) continue;
         Detection det;
         det.object_id = object.id;
@@ -81,6 +83,44 @@ Recognition Recognizer::recognize(const Frame& frame) const {
         best = det;
         if (!options_.keep_best) break;
       }
+    }
+    if (best && options_.try_half_turns) {
+      // The same pose turned about the object's own axes, each refined and verified.
+      const DatabaseObject* object = nullptr;
+      std::uint32_t object_index = 0;
+      for (std::uint32_t i = 0; i < db_.objects.size(); ++i) {
+        if (db_.objects[i].id == best->object_id) { object = &db_.objects[i]; object_index = i; }
+      }
+      const BoundingBox box = bounding_box(object->mesh);
+      const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
+      Detection chosen = *best;
+      double runner_up = 0;
+      for (int axis = 0; axis < 3; ++axis) {
+        // Half a turn about the axis through the box centre, in the object frame.
+        const Eigen::Matrix3d R = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
+        const Transform turn = make_transform(R, centre - R * centre);
+        t = Clock::now();
+        const IcpResult icp = icp_point_to_plane(icp_source, *targets_[object_index], (best->T_camera_object * turn).inverse(), options_.icp);
+        out.times.icp_ms += ms_since(t);
+        const Transform T = icp.T_target_source.inverse();
+        t = Clock::now();
+        const Verification v = verify_pose(object->mesh, T, frame.depth, frame.K, d.cloud.points, options_.verify);
+        out.times.verify_ms += ms_since(t);
+        ++out.hypotheses;
+        if (!v.accepted) continue;
+        if (v.score > chosen.score) {
+          runner_up = std::max(runner_up, chosen.score);
+          chosen.T_camera_object = T;
+          chosen.score = v.score;
+          chosen.icp_fitness = icp.fitness;
+          chosen.icp_rmse_m = icp.inlier_rmse;
+          chosen.verification = v;
+        } else {
+          runner_up = std::max(runner_up, v.score);
+        }
+      }
+      chosen.runner_up_score = runner_up;
+      best = chosen;
     }
     if (best) out.detections.push_back(*best);
   }

@@ -39,6 +39,22 @@ RgbImage colourize_depth(const DepthImage& depth, float near_m, float far_m) {
   return out;
 }
 
+void draw_line(RgbImage& image, Eigen::Vector2d a, Eigen::Vector2d b, const std::array<std::uint8_t, 3>& c) {
+  const double length = (b - a).norm();
+  if (!std::isfinite(length)) return;
+  const int steps = std::max(1, static_cast<int>(std::ceil(length)));
+  for (int i = 0; i <= steps && i <= 100000; ++i) {
+    const Eigen::Vector2d p = a + (b - a) * (static_cast<double>(i) / steps);
+    for (int d = 0; d < 2; ++d) image.set(static_cast<int>(std::lround(p.x())) + d, static_cast<int>(std::lround(p.y())), c[0], c[1], c[2]);
+  }
+}
+
+std::array<std::uint8_t, 3> palette(std::size_t i) {
+  static constexpr std::array<std::array<std::uint8_t, 3>, 8> colours = {
+      {{255, 64, 160}, {64, 255, 255}, {255, 200, 0}, {160, 100, 255}, {0, 255, 100}, {255, 120, 40}, {255, 255, 255}, {120, 160, 255}}};
+  return colours[i % colours.size()];
+}
+
 RgbImage tile_images(std::span<const RgbImage> images, int columns, int gap) {
   if (images.empty() || columns <= 0) return {};
   int cell_w = 0, cell_h = 0;

@@ -23,27 +23,22 @@ endfunction()
 run(TRUE --version)
 expect_in("${OUT}" "0.")
 
-# The demo writes every format and reads it back, and says which stages do not exist yet.
-run(TRUE demo --out "${WORK}/demo")
-expect_in("${OUT}" "organized 640 x 480")
-expect_in("${OUT}" "Not built yet")
-foreach(f camera.json scene_depth.png scene_ascii.pcd scene_binary.pcd scene_compressed.pcd scene.ply jug_mm.ply)
+# The demo recognizes the jug in simulated frames and prints poses beside the truth.
+run(TRUE demo --orientations 1 --out "${WORK}/demo")
+expect_in("${OUT}" "found 5 of 5")
+expect_in("${OUT}" "ADD-S correct 5 of 5")
+foreach(f camera.json d1.00_o0_depth.png d1.00_o0_overlay.png)
   if(NOT EXISTS "${WORK}/demo/${f}")
     message(FATAL_ERROR "demo did not write ${f}")
   endif()
 endforeach()
 
-expect_in("${OUT}" "ground truth T_camera_object of the jug")
-run(TRUE info "${WORK}/demo/scene_compressed.pcd" "${WORK}/demo/jug_mm.ply")
-expect_in("${OUT}" "PCD point cloud (binary_compressed, v0.7)")
-expect_in("${OUT}" "units guess:  millimetres")
-
 # Intrinsics from a BOP camera file or from flags turn a depth PNG into points.
-run(TRUE info "${WORK}/demo/scene_depth.png" --camera "${WORK}/demo/camera.json")
+run(TRUE info "${WORK}/demo/d1.00_o0_depth.png" --camera "${WORK}/demo/camera.json")
 expect_in("${OUT}" "intrinsics fx 525 fy 525 cx 319.5 cy 239.5")
-run(TRUE info "${WORK}/demo/scene_depth.png" --intrinsics 525 525 319.5 239.5 --depth-scale 1)
+run(TRUE info "${WORK}/demo/d1.00_o0_depth.png" --intrinsics 525 525 319.5 239.5 --depth-scale 1)
 expect_in("${OUT}" "] m (size")
-run(FALSE info "${WORK}/demo/scene_depth.png" --intrinsics 525 525 319.5)
+run(FALSE info "${WORK}/demo/d1.00_o0_depth.png" --intrinsics 525 525 319.5)
 
 # A small seed experiment, read back by `info`, with a contact sheet to look at.
 run(TRUE simulate --preset seed-experiment --orientations 2 --distances 0.75,1.5 --seed 3 -o "${WORK}/sim"
@@ -72,13 +67,30 @@ expect_in("${ERR}" "bad.vpdb: not a viewpose view database")
 run(FALSE db build -o "${WORK}/none.vpdb")
 expect_in("${ERR}" "no objects")
 
+# Recognition from the command line, and a whole BOP split.
+run(TRUE db build jug -o "${WORK}/jug.vpdb")
+run(TRUE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json"
+    --json "${WORK}/r.json" --overlay "${WORK}/ov.png" --aligned "${WORK}/al.ply")
+expect_in("${OUT}" "jug (id 1): position")
+file(READ "${WORK}/r.json" json)
+expect_in("${json}" "\"times_ms\"")
+if(NOT EXISTS "${WORK}/ov.png" OR NOT EXISTS "${WORK}/al.ply")
+  message(FATAL_ERROR "recognize did not write the overlay or the aligned cloud")
+endif()
+run(FALSE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png")
+expect_in("${ERR}" "needs its camera")
+run(TRUE bop --db "${WORK}/jug.vpdb" --dataset "${WORK}/sim" -o "${WORK}/results.csv")
+expect_in("${OUT}" "in 4 images")
+run(TRUE info "${WORK}/results.csv")
+expect_in("${OUT}" "BOP19 results CSV")
+
 # Bad input: one line on stderr naming the file, non-zero exit, and the good files still reported.
 run(FALSE info "${WORK}/missing.pcd")
 expect_in("${ERR}" "viewpose: error: ${WORK}/missing.pcd: no such file")
 file(WRITE "${WORK}/truncated.pcd" "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 10\nHEIGHT 1\nPOINTS 10\nDATA binary\nabc")
-run(FALSE info "${WORK}/truncated.pcd" "${WORK}/demo/scene.ply")
+run(FALSE info "${WORK}/truncated.pcd" "${WORK}/sim/models/obj_000001.ply")
 expect_in("${ERR}" "truncated.pcd: header says 10 points but the binary data holds 0")
-expect_in("${OUT}" "PLY point cloud")
+expect_in("${OUT}" "PLY mesh")
 string(REGEX MATCHALL "\n" lines "${ERR}")
 list(LENGTH lines n)
 if(NOT n EQUAL 1)

@@ -1,0 +1,189 @@
+// `viewpose recognize` (one scene) and `viewpose bop` (every image of a BOP dataset split).
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "camera_flags.hpp"
+#include "commands.hpp"
+#include "progress.hpp"
+#include "scene_input.hpp"
+#include "viewpose/core/error.hpp"
+#include "viewpose/io/bop.hpp"
+#include "viewpose/io/bop_results.hpp"
+#include "viewpose/io/file.hpp"
+#include "viewpose/io/image_png.hpp"
+#include "viewpose/io/ply.hpp"
+#include "viewpose/recognize/recognizer.hpp"
+#include "viewpose/visualize/overlay.hpp"
+
+namespace viewpose::cli {
+
+namespace {
+
+struct RecognizeFlags {
+  std::string db;
+  bool keep_best = false;
+  std::size_t matches = 20;
+  void add_to(CLI::App& cmd) {
+    cmd.add_option("--db", db, "View database (viewpose db build)")->required()->check(CLI::ExistingFile);
+    cmd.add_flag("--keep-best", keep_best, "Try every hypothesis and keep the best, not the first that passes");
+    cmd.add_option("--matches", matches, "Nearest views tried per cluster")->check(CLI::Range(1, 1000))->capture_default_str();
+  }
+  RecognizerOptions options() const {
+    RecognizerOptions o;
+    o.keep_best = keep_best;
+    o.matches = matches;
+    return o;
+  }
+};
+
+// Yaw about z, then pitch about y, then roll about x (R = Rz Ry Rx), in degrees.
+Eigen::Vector3d yaw_pitch_roll_deg(const Eigen::Matrix3d& R) {
+  const double pitch = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
+  const double yaw = std::atan2(R(1, 0), R(0, 0)), roll = std::atan2(R(2, 1), R(2, 2));
+  return Eigen::Vector3d(yaw, pitch, roll) * 180.0 / std::numbers::pi;
+}
+
+nlohmann::json to_json(const Recognition& r) {
+  nlohmann::json dets = nlohmann::json::array();
+  for (const Detection& d : r.detections) {
+    const Eigen::Matrix3d R = d.T_camera_object.linear();
+    const Eigen::Vector3d t = d.T_camera_object.translation();
+    dets.push_back({{"object_id", d.object_id}, {"object_name", d.object_name},
+                    {"R", {R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2)}},
+                    {"t_m", {t.x(), t.y(), t.z()}}, {"score", d.score}, {"icp_fitness", d.icp_fitness},
+                    {"icp_rmse_m", d.icp_rmse_m}, {"match_rank", d.match_rank}, {"roll_deg", d.roll_deg},
+                    {"cluster_points", d.cluster_points},
+                    {"verification", {{"inlier_fraction", d.verification.inlier_fraction},
+                                      {"conflict_fraction", d.verification.conflict_fraction},
+                                      {"cluster_explained", d.verification.cluster_explained}}}});
+  }
+  const StageTimes& t = r.times;
+  return {{"detections", dets}, {"clusters", r.clusters}, {"hypotheses", r.hypotheses},
+          {"times_ms", {{"downsample", t.downsample_ms}, {"segment", t.segment_ms}, {"normals", t.normals_ms},
+                        {"vfh", t.vfh_ms}, {"match", t.match_ms}, {"crh", t.crh_ms}, {"icp", t.icp_ms},
+                        {"verify", t.verify_ms}, {"total", t.total_ms}}}};
+}
+
+}  // namespace
+
+void print_recognition(const Recognition& r) {
+  if (r.detections.empty()) fmt::print("no known object found ({} clusters, {} poses tried)\n", r.clusters, r.hypotheses);
+  for (const Detection& d : r.detections) {
+    const Eigen::Vector3d t = d.T_camera_object.translation();
+    const Eigen::Vector3d ypr = yaw_pitch_roll_deg(d.T_camera_object.linear());
+    fmt::print("{} (id {}): position ({:.3f}, {:.3f}, {:.3f}) m, yaw/pitch/roll ({:.1f}, {:.1f}, {:.1f}) deg, score {:.2f}, "
+               "match rank {}\n", d.object_name, d.object_id, t.x(), t.y(), t.z(), ypr.x(), ypr.y(), ypr.z(), d.score,
+               d.match_rank);
+  }
+  const StageTimes& s = r.times;
+  fmt::print("time {:.1f} ms: downsample {:.1f}, segment {:.1f}, normals {:.1f}, vfh {:.1f}, match {:.1f}, crh {:.1f}, "
+             "icp {:.1f}, verify {:.1f}\n", s.total_ms, s.downsample_ms, s.segment_ms, s.normals_ms, s.vfh_ms, s.match_ms,
+             s.crh_ms, s.icp_ms, s.verify_ms);
+}
+
+void add_recognize_command(CLI::App& app, int& exit_code) {
+  struct Options {
+    RecognizeFlags flags;
+    CameraFlags camera;
+    std::string scene, json, overlay, aligned;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("recognize", "Find the database's objects in one scene and estimate their poses");
+  o->flags.add_to(*cmd);
+  cmd->add_option("scene", o->scene, "Depth PNG (with --camera or --intrinsics), PCD or PLY cloud")->required();
+  o->camera.add_to(*cmd);
+  cmd->add_option("--json", o->json, "Write detections and per-stage times (ms) as JSON");
+  cmd->add_option("--overlay", o->overlay, "Write a PNG of the depth with each detected model drawn in colour");
+  cmd->add_option("--aligned", o->aligned, "Write a PLY of the scene with the aligned model points");
+  cmd->callback([o, &exit_code] {
+    const ViewDatabase db = ViewDatabase::load(o->flags.db);
+    const Frame frame = load_scene(o->scene, o->camera);
+    const Recognizer recognizer(db, o->flags.options());
+    const Recognition r = recognizer.recognize(frame);
+    print_recognition(r);
+    if (!o->json.empty()) {
+      nlohmann::json j = to_json(r);
+      j["scene"] = o->scene;
+      write_file_atomic(o->json, j.dump(1) + "\n");
+    }
+    std::vector<OverlayItem> items;
+    for (const Detection& d : r.detections) {
+      for (const auto& obj : db.objects) {
+        if (obj.id == d.object_id) items.push_back({&obj.mesh, d.T_camera_object, 0.5 * obj.diameter_m});
+      }
+    }
+    if (!o->overlay.empty()) write_rgb_png(o->overlay, draw_overlay(frame.depth, frame.K, items));
+    if (!o->aligned.empty()) {
+      PointCloud out;
+      for (const auto& p : frame.cloud.points) {
+        if (!p.allFinite()) continue;
+        out.points.push_back(p);
+        out.rgba.push_back(0xff909090u);
+      }
+      for (std::size_t i = 0; i < r.detections.size(); ++i) {
+        const auto c = palette(i);
+        for (const auto& obj : db.objects) {
+          if (obj.id != r.detections[i].object_id) continue;
+          for (const auto& p : obj.model_points) {
+            out.points.push_back((r.detections[i].T_camera_object * p.cast<double>()).cast<float>());
+            out.rgba.push_back(0xff000000u | (std::uint32_t{c[0]} << 16) | (std::uint32_t{c[1]} << 8) | c[2]);
+          }
+        }
+      }
+      out.width = static_cast<int>(out.points.size());
+      write_ply(o->aligned, out, PlyEncoding::BinaryLittleEndian);
+    }
+    exit_code = 0;
+  });
+}
+
+void add_bop_command(CLI::App& app, int& exit_code) {
+  struct Options {
+    RecognizeFlags flags;
+    std::string dataset, split = "test", out, models_dir = "models";
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("bop", "Run recognition on every image of a BOP dataset split; write BOP19 CSV");
+  o->flags.add_to(*cmd);
+  cmd->add_option("--dataset", o->dataset, "BOP dataset folder")->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("--split", o->split, "Split folder")->capture_default_str();
+  cmd->add_option("--models-dir", o->models_dir, "Folder of models_info.json, under the dataset")->capture_default_str();
+  cmd->add_option("-o,--out", o->out, "Results CSV")->required();
+  cmd->callback([o, &exit_code] {
+    const ViewDatabase db = ViewDatabase::load(o->flags.db);
+    const BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
+    const Recognizer recognizer(db, o->flags.options());
+    std::vector<BopResult> results;
+    std::size_t detections = 0;
+    double total_ms = 0;
+    {
+      ProgressBar bar("bop", ds.images.size());
+      for (std::size_t i = 0; i < ds.images.size(); ++i) {
+        const BopImage& im = ds.images[i];
+        const auto start = std::chrono::steady_clock::now();
+        const BopFrame bf = load_bop_frame(im);
+        const Recognition r = recognizer.recognize(frame_from_depth(bf.depth, bf.K));
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        total_ms += 1000 * seconds;
+        for (const Detection& d : r.detections) {
+          results.push_back({im.scene_id, im.im_id, d.object_id, d.score, d.T_camera_object, seconds});
+          ++detections;
+        }
+        bar.update(i + 1);
+      }
+    }
+    write_bop_results(o->out, results);
+    fmt::print("{}: {} detections in {} images, {:.1f} ms per image\n", o->out, detections, ds.images.size(),
+               total_ms / static_cast<double>(std::max<std::size_t>(ds.images.size(), 1)));
+    exit_code = 0;
+  });
+}
+
+}  // namespace viewpose::cli

@@ -1,0 +1,188 @@
+// End-to-end recognition on simulated frames with ground truth (issue 5's acceptance), and on the
+// real Xtion frames of ../shared/data/ycbv_real_sample.
+#include <fstream>
+#include <numbers>
+
+#include "test_support.hpp"
+#include "viewpose/eval/metrics.hpp"
+#include "viewpose/io/bop.hpp"
+#include "viewpose/io/ply.hpp"
+#include "viewpose/recognize/recognizer.hpp"
+#include "viewpose/render/shapes.hpp"
+#include "viewpose/simulate/scene.hpp"
+
+namespace viewpose {
+namespace {
+
+const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
+
+const ViewDatabase& jug_and_can_db() {
+  static const ViewDatabase db = [] {
+    const std::vector<ObjectModel> models = {{1, "jug", make_jug()}, {2, "can", make_can()}};
+    return build_view_database(models, DatabaseParams{});
+  }();
+  return db;
+}
+
+const ViewDatabase& jug_db() {
+  static const ViewDatabase db = [] {
+    const ObjectModel jug{1, "jug", make_jug()};
+    return build_view_database(std::span(&jug, 1), DatabaseParams{});
+  }();
+  return db;
+}
+
+TEST(Recognize, NoiseFreeJugAtOneMetreWithinFiveMillimetresAndTwoDegrees) {
+  const Recognizer recognizer(jug_db());
+  SeedExperimentOptions setup;
+  setup.distances_m = {1.0};
+  setup.orientations = 3;
+  const SimDataset ds = make_seed_experiment(SimObject{1, "jug", make_jug()}, K, setup, 21);
+  for (const SimImage& image : ds.scenes[0].images) {
+    const SimulatedFrame f = simulate_image(ds, image, SensorModel::ideal(), 1);
+    const Recognition r = recognizer.recognize(frame_from_depth(f.depth, K));
+    ASSERT_EQ(r.detections.size(), 1u);
+    const Detection& d = r.detections[0];
+    EXPECT_EQ(d.object_id, 1);
+    EXPECT_LT((d.T_camera_object.translation() - f.gt[0].T_camera_object.translation()).norm(), 0.005);
+    EXPECT_LT(rotation_difference_deg(d.T_camera_object.linear(), f.gt[0].T_camera_object.linear()), 2.0);
+    EXPECT_GT(d.score, 0.9);
+  }
+}
+
+TEST(Recognize, NoisySeedExperimentSubsetMeetsAddSWithoutFalsePositives) {
+  const ViewDatabase& db = jug_db();
+  const Recognizer recognizer(db);
+  SeedExperimentOptions setup;
+  setup.orientations = 3;  // x 5 distances, 0.75 to 2.00 m
+  const TriangleMesh jug = make_jug();
+  const SimDataset ds = make_seed_experiment(SimObject{1, "jug", jug}, K, setup, 33);
+  const double threshold = 0.1 * db.objects[0].diameter_m;
+  int frames = 0, correct = 0, false_positives = 0;
+  for (const SimScene& scene : ds.scenes) {
+    for (std::size_t k = 0; k < scene.images.size(); ++k) {
+      const SimulatedFrame f = simulate_image(ds, scene.images[k], SensorModel::kinect_v1(), 7 * scene.scene_id + k);
+      const Recognition r = recognizer.recognize(frame_from_depth(f.depth, K));
+      ++frames;
+      ASSERT_LE(r.detections.size(), 1u);
+      if (r.detections.empty()) continue;
+      const double e = add_s_error(r.detections[0].T_camera_object, f.gt[0].T_camera_object, jug.vertices);
+      if (e < threshold) ++correct;
+      else ++false_positives;
+    }
+  }
+  EXPECT_GE(correct, frames * 9 / 10) << correct << " of " << frames;
+  EXPECT_EQ(false_positives, 0);
+}
+
+TEST(Recognize, FrameWithNoKnownObjectGivesNoDetection) {
+  // A can and a mug on the table, but a database of the jug only.
+  SimDataset ds = make_seed_experiment(SimObject{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
+  ds.objects = {{7, "can", make_can()}, {8, "mug", make_mug()}};
+  const Transform& T = ds.scenes[0].images[0].objects[0].T_camera_object;
+  const Transform left = T * make_transform(Eigen::Matrix3d::Identity(), {-0.12, 0, -0.09});
+  const Transform right = T * make_transform(Eigen::Matrix3d::Identity(), {0.12, 0, -0.1});
+  const SimulatedFrame f = simulate_image(ds, SimImage{{{0, left}, {1, right}}}, SensorModel::kinect_v1(), 5);
+  ASSERT_GT(f.gt_info[0].px_count_visib, 500);
+  ASSERT_GT(f.gt_info[1].px_count_visib, 500);
+  const Recognition r = Recognizer(jug_db()).recognize(frame_from_depth(f.depth, K));
+  EXPECT_GE(r.clusters, 2u);
+  EXPECT_TRUE(r.detections.empty()) << r.detections.size() << " detections, first " << r.detections[0].object_name;
+}
+
+TEST(Recognize, TwoObjectFrameGivesBothWithTheRightIds) {
+  const ViewDatabase& db = jug_and_can_db();
+  SimDataset ds = make_seed_experiment(SimObject{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
+  ds.objects = {{1, "jug", make_jug()}, {2, "can", make_can()}};
+  const Transform& jug_pose = ds.scenes[0].images[0].objects[0].T_camera_object;
+  // The can stands on the table 25 cm to the jug's side: its base 15.35 cm below the jug's centre
+  // plane... expressed by moving along the jug's own axes (upright, z up).
+  const double lift = static_cast<double>(bounding_box(make_jug()).min.z() - bounding_box(make_can()).min.z());
+  const Transform can_pose = jug_pose * make_transform(Eigen::Matrix3d::Identity(), {0.25, 0.0, lift});
+  const SimulatedFrame f = simulate_image(ds, SimImage{{{0, jug_pose}, {1, can_pose}}}, SensorModel::kinect_v1(), 9);
+  const Recognition r = Recognizer(db).recognize(frame_from_depth(f.depth, K));
+  ASSERT_EQ(r.detections.size(), 2u);
+  for (const Detection& d : r.detections) {
+    const int truth = d.object_id == 1 ? 0 : 1;
+    const TriangleMesh mesh = d.object_id == 1 ? make_jug() : make_can();
+    EXPECT_LT(add_s_error(d.T_camera_object, f.gt[static_cast<std::size_t>(truth)].T_camera_object, mesh.vertices),
+              0.1 * mesh_diameter(mesh)) << d.object_name;
+  }
+  EXPECT_NE(r.detections[0].object_id, r.detections[1].object_id);
+}
+
+TEST(Frame, IntrinsicsAreRecoveredFromAnOrganizedCloud) {
+  const CameraIntrinsics truth{570.3, 565.1, 321.7, 236.2, 640, 480};
+  DepthImage d(640, 480);
+  for (int v = 0; v < 480; ++v)
+    for (int u = 0; u < 640; ++u) d.at(u, v) = (u + v) % 9 == 0 ? NAN : 1.0f + 0.001f * static_cast<float>(u);
+  const Frame f = frame_from_cloud(depth_to_cloud(d, truth));
+  EXPECT_NEAR(f.K.fx, truth.fx, 1e-2);
+  EXPECT_NEAR(f.K.fy, truth.fy, 1e-2);
+  EXPECT_NEAR(f.K.cx, truth.cx, 1e-2);
+  EXPECT_NEAR(f.K.cy, truth.cy, 1e-2);
+  EXPECT_EQ(f.depth.count_valid(), d.count_valid());
+  // A cloud that is not one pinhole image is refused, not silently mis-projected.
+  PointCloud shuffled = depth_to_cloud(d, truth);
+  std::swap(shuffled.points[1000], shuffled.points[200000]);
+  for (std::size_t i = 0; i < shuffled.size(); i += 3) std::swap(shuffled.points[i], shuffled.points[shuffled.size() - 1 - i]);
+  test::expect_error([&] { intrinsics_from_organized_cloud(shuffled); }, "not one pinhole image");
+}
+
+TEST(Metrics, AddAndAddSOnKnownOffsets) {
+  const std::vector<Eigen::Vector3f> pts = {{0.1f, 0, 0}, {-0.1f, 0, 0}, {0, 0.1f, 0}, {0, -0.1f, 0}};
+  const Transform truth = Transform::Identity();
+  const Transform shifted = make_transform(Eigen::Matrix3d::Identity(), {0.003, 0, 0});
+  EXPECT_NEAR(add_error(shifted, truth, pts), 0.003, 1e-9);
+  // A half turn about z maps this symmetric set onto itself: ADD sees 0.2 m, ADD-S nothing.
+  const Transform turned = make_transform(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitZ()).toRotationMatrix(), Eigen::Vector3d::Zero());
+  EXPECT_NEAR(add_error(turned, truth, pts), 0.2, 1e-6);
+  EXPECT_NEAR(add_s_error(turned, truth, pts), 0.0, 1e-6);
+}
+
+TEST(RealData, YcbvGelatinBoxIsFoundInBothXtionFrames) {
+  // Measured (see the issue notes): with a database of the three matching BOP models the gelatin
+  // box is found in both frames; the mug and the foam brick touch and merge into one cluster that
+  // neither model explains. The acceptance of issue 5 (two of three) is not met yet.
+  VIEWPOSE_REQUIRE_SHARED_DATA();
+  const auto dir = test::shared_data() / "ycbv_real_sample";
+  const BopDataset ds = open_bop_dataset(dir, "data", {"models_bop_ycbv"});
+  std::vector<ObjectModel> models;
+  for (int id : {8, 14, 21}) {
+    PlyFile ply = read_ply(ds.model_files.at(id));
+    for (auto& v : ply.mesh.vertices) v *= 0.001f;
+    ply.mesh.normals.clear();
+    models.push_back({id, fmt::format("obj_{:06d}", id), std::move(ply.mesh)});
+  }
+  const ViewDatabase db = build_view_database(models, DatabaseParams{});
+  const Recognizer recognizer(db);
+  for (const BopImage& im : ds.images) {
+    const BopFrame bf = load_bop_frame(im);
+    const Recognition r = recognizer.recognize(frame_from_depth(bf.depth, bf.K));
+    const GroundTruthPose& gelatin = im.gt.at(0);
+    ASSERT_EQ(gelatin.obj_id, 8);
+    // The ground truth is in the YCB-Video model frame (points.xyz); the BOP mesh is that model
+    // moved so that its bounding box is centred (MANIFEST: a few mm), p_ycb = p_bop + c. In the
+    // mesh's frame the truth is T_camera_ycb * translation(c).
+    std::vector<Eigen::Vector3f> ycb_points;
+    {
+      std::ifstream in(dir / "models/009_gelatin_box/points.xyz");
+      float x, y, z;
+      while (in >> x >> y >> z) ycb_points.emplace_back(x, y, z);
+    }
+    ASSERT_GT(ycb_points.size(), 1000u);
+    const BoundingBox box = bounding_box(ycb_points);
+    const Eigen::Vector3d c = (0.5f * (box.min + box.max)).cast<double>();
+    EXPECT_LT(c.norm(), 0.006) << "the MANIFEST's offset is a few mm";
+    const Transform truth = gelatin.T_camera_object * make_transform(Eigen::Matrix3d::Identity(), c);
+    bool found = false;
+    for (const Detection& d : r.detections) {
+      if (d.object_id != 8) continue;
+      found = add_s_error(d.T_camera_object, truth, models[0].mesh.vertices) < 0.1 * db.objects[0].diameter_m;
+    }
+    EXPECT_TRUE(found) << "image " << im.im_id;
+  }
+}
+
+}  // namespace
+}  // namespace viewpose
