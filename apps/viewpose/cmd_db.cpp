@@ -13,6 +13,8 @@
 #include "progress.hpp"
 #include "viewpose/core/error.hpp"
 #include "viewpose/database/view_database.hpp"
+#include "viewpose/io/pcd.hpp"
+#include "viewpose/io/ply.hpp"
 
 namespace viewpose::cli {
 
@@ -23,7 +25,7 @@ void print_database(const fs::path& path, const ViewDatabase& db) {
   std::uintmax_t bytes = fs::exists(path) ? fs::file_size(path) : 0;
   fmt::print("{}: viewpose view database, format version {}, {:.1f} MB\n", path.string(), ViewDatabase::kFormatVersion,
              static_cast<double>(bytes) / 1e6);
-  fmt::print("  views:     {} ({} per object: view sphere with {} subdivision(s), camera {:.2f} m from the centre)\n",
+  fmt::print("  views:     {} (a mesh object gets {}: view sphere with {} subdivision(s), camera {:.2f} m from the centre)\n",
              db.views.size(), 20 << (2 * p.subdivisions), p.subdivisions, p.distance_m);
   fmt::print("  camera:    {}x{}, fx {} fy {} cx {} cy {}\n", p.camera.width, p.camera.height, p.camera.fx, p.camera.fy,
              p.camera.cx, p.camera.cy);
@@ -37,8 +39,9 @@ void print_database(const fs::path& path, const ViewDatabase& db) {
       ++views;
       points += v.points.size();
     }
-    fmt::print("    id {:>4}  {:<24} diameter {:6.1f} mm, {} views, {} points per view on average\n", db.objects[o].id,
-               db.objects[o].name, db.objects[o].diameter_m * 1000, views, views ? points / views : 0);
+    fmt::print("    id {:>4}  {:<24} diameter {:6.1f} mm, {} views, {} points per view on average{}\n", db.objects[o].id,
+               db.objects[o].name, db.objects[o].diameter_m * 1000, views, views ? points / views : 0,
+               db.objects[o].mesh.triangles.empty() ? " (scanned)" : "");
   }
 }
 
@@ -93,6 +96,26 @@ void add_db_command(CLI::App& app, int& exit_code) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     fmt::print("built in {:.2f} s ({:.2f} s per object)\n", seconds, seconds / static_cast<double>(models.size()));
     print_database(b->out, db);
+    exit_code = 0;
+  });
+
+  struct AddViewOptions {
+    std::string cloud, object, db;
+  };
+  auto a = std::make_shared<AddViewOptions>();
+  CLI::App* add_view = db_cmd->add_subcommand("add-view", "Add a view scanned with a real sensor (PCD/PLY of the object alone)");
+  add_view->add_option("cloud", a->cloud, "The object's points, in the capturing camera's frame")->required()->check(CLI::ExistingFile);
+  add_view->add_option("--object", a->object, "Object name: a new scanned object, or one to give another view")->required();
+  add_view->add_option("--db", a->db, "Database to add to (made, with default parameters, if missing)")->required();
+  add_view->callback([a, &exit_code] {
+    ViewDatabase db;
+    if (fs::exists(a->db)) db = ViewDatabase::load(a->db);
+    const std::string ext = fs::path(a->cloud).extension().string();
+    const PointCloud cloud = ext == ".ply" ? read_ply(a->cloud).cloud : read_pcd(a->cloud).cloud;
+    const int id = add_captured_view(db, cloud, a->object);
+    db.save(a->db);
+    fmt::print("added a view of '{}' (id {}) from {}\n", a->object, id, a->cloud);
+    print_database(a->db, db);
     exit_code = 0;
   });
 

@@ -241,6 +241,49 @@ void ViewDatabase::save(const std::filesystem::path& path) const { write_file_at
 
 ViewDatabase ViewDatabase::load(const std::filesystem::path& path) { return deserialize(read_file_bytes(path), path.string()); }
 
+int add_captured_view(ViewDatabase& db, const PointCloud& cloud, const std::string& name) {
+  if (name.empty()) throw Error("add-view: the object needs a name");
+  PointCloud points = voxel_downsample(cloud, db.params.voxel_m);
+  if (points.size() < 50) throw Error(fmt::format("add-view: only {} points after the voxel grid; is the cloud the object?", points.size()));
+  Description d = describe(std::move(points), db.params.describe);
+  std::uint32_t index = 0;
+  while (index < db.objects.size() && db.objects[index].name != name) ++index;
+  if (index == db.objects.size()) {
+    DatabaseObject o;
+    o.name = name;
+    for (const auto& existing : db.objects) o.id = std::max(o.id, existing.id);
+    ++o.id;
+    db.objects.push_back(std::move(o));
+  } else if (!db.objects[index].mesh.triangles.empty()) {
+    throw Error(fmt::format("add-view: object '{}' comes from a mesh; captured views are for scanned objects", name));
+  }
+  DatabaseObject& object = db.objects[index];
+  ViewEntry v;
+  v.object = index;
+  v.T_view_object = Transform::Identity();  // the capture's frame is the object's
+  v.vfh = d.vfh;
+  v.crh = d.crh;
+  v.centroid = d.centroid;
+  v.icp_points = voxel_downsample(d.cloud, db.params.icp_voxel_m).points;
+  v.points = d.cloud.points;
+  v.normals = d.cloud.normals;
+  db.views.push_back(std::move(v));
+  // The model cloud grows with every view; the diameter follows it.
+  PointCloud model;
+  model.points = object.model_points;
+  model.normals = object.model_normals;
+  model.points.insert(model.points.end(), d.cloud.points.begin(), d.cloud.points.end());
+  model.normals.insert(model.normals.end(), d.cloud.normals.begin(), d.cloud.normals.end());
+  model.width = static_cast<int>(model.points.size());
+  PointCloud grid = voxel_downsample(model, db.params.voxel_m);
+  object.model_points = std::move(grid.points);
+  object.model_normals = std::move(grid.normals);
+  TriangleMesh hull;
+  hull.vertices = object.model_points;
+  object.diameter_m = mesh_diameter(hull);
+  return object.id;
+}
+
 PointCloud view_points(const DepthImage& depth, const CameraIntrinsics& K, float voxel_m) {
   return voxel_downsample(depth_to_cloud(depth, K), voxel_m);
 }

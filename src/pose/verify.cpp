@@ -11,12 +11,17 @@ float depth_tolerance(float z_m, const VerifyOptions& o) {
   return o.base_tolerance_m + o.noise_factor * static_cast<float>(axial_noise_sigma(z_m, 0.0));
 }
 
-Verification verify_pose(const TriangleMesh& mesh, const Transform& T_camera_object, const DepthImage& observed,
+Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_object, const DepthImage& observed,
                          const CameraIntrinsics& K, std::span<const Eigen::Vector3f> cluster_points,
                          const VerifyOptions& o) {
   Verification v;
-  const MeshInstance inst{&mesh, T_camera_object};
-  const RenderedFrame model = render(std::span(&inst, 1), K);
+  RenderedFrame model;
+  if (shape.mesh && !shape.mesh->triangles.empty()) {
+    const MeshInstance inst{shape.mesh, T_camera_object};
+    model = render(std::span(&inst, 1), K);
+  } else {
+    model = render_points(shape.points, T_camera_object, K, shape.point_spacing_m);
+  }
   const int W = K.width, H = K.height, m = o.edge_margin_px;
   const auto z_model = [&](int col, int row) -> float {
     return (col < 0 || row < 0 || col >= W || row >= H) ? NAN : model.depth.at(col, row);

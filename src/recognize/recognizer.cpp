@@ -66,7 +66,8 @@ Recognition Recognizer::recognize(const Frame& frame) const {
         if (icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
         const Transform T = icp.T_target_source.inverse();
         t = Clock::now();
-        const Verification v = verify_pose(object.mesh, T, frame.depth, frame.K, d.cloud.points, options_.verify);
+        const Verification v = verify_pose({&object.mesh, object.model_points, db_.params.voxel_m}, T, frame.depth, frame.K,
+                                           d.cloud.points, options_.verify);
         out.times.verify_ms += ms_since(t);
         if (!v.accepted || (best && best->score >= v.score)) continue;
         Detection det;
@@ -91,7 +92,7 @@ Recognition Recognizer::recognize(const Frame& frame) const {
       for (std::uint32_t i = 0; i < db_.objects.size(); ++i) {
         if (db_.objects[i].id == best->object_id) { object = &db_.objects[i]; object_index = i; }
       }
-      const BoundingBox box = bounding_box(object->mesh);
+      const BoundingBox box = bounding_box(object->model_points);
       const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
       Detection chosen = *best;
       double runner_up = 0;
@@ -104,7 +105,8 @@ Recognition Recognizer::recognize(const Frame& frame) const {
         out.times.icp_ms += ms_since(t);
         const Transform T = icp.T_target_source.inverse();
         t = Clock::now();
-        const Verification v = verify_pose(object->mesh, T, frame.depth, frame.K, d.cloud.points, options_.verify);
+        const Verification v = verify_pose({&object->mesh, object->model_points, db_.params.voxel_m}, T, frame.depth,
+                                           frame.K, d.cloud.points, options_.verify);
         out.times.verify_ms += ms_since(t);
         ++out.hypotheses;
         if (!v.accepted) continue;

@@ -134,6 +134,31 @@ RenderedFrame render(std::span<const MeshInstance> instances, const CameraIntrin
   return frame;
 }
 
+RenderedFrame render_points(std::span<const Eigen::Vector3f> points, const Transform& T, const CameraIntrinsics& K,
+                            float spacing_m) {
+  K.validate();
+  RenderedFrame frame;
+  frame.depth = DepthImage(K.width, K.height);
+  frame.instance.assign(frame.depth.depth_m.size(), -1);
+  for (const Eigen::Vector3f& p_object : points) {
+    const Eigen::Vector3d p = T * p_object.cast<double>();
+    if (!(p.z() > 0.01)) continue;
+    const Eigen::Vector2d uv = K.project(p);
+    const int half = std::max(0, static_cast<int>(std::ceil(0.5 * K.fx * spacing_m / p.z())));
+    const int u0 = static_cast<int>(std::lround(uv.x())), v0 = static_cast<int>(std::lround(uv.y()));
+    for (int v = std::max(0, v0 - half); v <= std::min(K.height - 1, v0 + half); ++v) {
+      for (int u = std::max(0, u0 - half); u <= std::min(K.width - 1, u0 + half); ++u) {
+        float& z = frame.depth.at(u, v);
+        if (!(p.z() >= z)) {
+          z = static_cast<float>(p.z());
+          frame.instance[static_cast<std::size_t>(v) * static_cast<std::size_t>(K.width) + static_cast<std::size_t>(u)] = 0;
+        }
+      }
+    }
+  }
+  return frame;
+}
+
 std::vector<RenderedFrame> render_views(const TriangleMesh& mesh, std::span<const Transform> T_camera_object,
                                         const CameraIntrinsics& K, const RenderOptions& options) {
   K.validate();

@@ -60,7 +60,7 @@ expect_in("${ERR}" "no-such-mesh.obj: no such file")
 run(TRUE db build jug can --views 20 -o "${WORK}/objects.vpdb")
 expect_in("${OUT}" "id    2  can")
 run(TRUE db info "${WORK}/objects.vpdb")
-expect_in("${OUT}" "views:     40 (20 per object")
+expect_in("${OUT}" "views:     40 (a mesh object gets 20")
 file(WRITE "${WORK}/bad.vpdb" "VPDB but not really")
 run(FALSE db info "${WORK}/bad.vpdb")
 expect_in("${ERR}" "bad.vpdb: not a viewpose view database")
@@ -83,6 +83,13 @@ run(TRUE bop --db "${WORK}/jug.vpdb" --dataset "${WORK}/sim" -o "${WORK}/results
 expect_in("${OUT}" "in 4 images")
 run(TRUE info "${WORK}/results.csv")
 expect_in("${OUT}" "BOP19 results CSV")
+
+# A scanned view: a cloud of the object alone becomes a database of its own.
+file(REMOVE "${WORK}/scanned.vpdb")
+run(TRUE db add-view "${WORK}/al.ply" --object scene-and-jug --db "${WORK}/scanned.vpdb")
+expect_in("${OUT}" "(scanned)")
+run(FALSE db add-view "${WORK}/al.ply" --object jug --db "${WORK}/jug.vpdb")
+expect_in("${ERR}" "comes from a mesh")
 
 # Bad input: one line on stderr naming the file, non-zero exit, and the good files still reported.
 run(FALSE info "${WORK}/missing.pcd")

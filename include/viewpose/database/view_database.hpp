@@ -69,6 +69,12 @@ struct ObjectModel {
 ViewDatabase build_view_database(std::span<const ObjectModel> objects, const DatabaseParams& params,
                                  const std::function<void(std::size_t, std::size_t)>& progress = {});
 
+/// Adds a view captured by a real sensor (the thesis's other way to fill a database): `cloud` holds
+/// only the object, in the capture's camera frame, which becomes the object's frame. A new object
+/// named `name` is created (id one more than the largest), or an earlier scanned object of that name
+/// gets another view; an object with a mesh cannot (its frame is the mesh's). Returns the object id.
+int add_captured_view(ViewDatabase& db, const PointCloud& cloud, const std::string& name);
+
 /// The cloud a view (or a scene frame) is described from: its valid pixels, voxelized.
 PointCloud view_points(const DepthImage& depth, const CameraIntrinsics& K, float voxel_m);
 

@@ -41,7 +41,15 @@ struct Verification {
 /// Tolerance (m) at depth z: base + factor * Kinect sigma(z).
 float depth_tolerance(float z_m, const VerifyOptions& options);
 
-Verification verify_pose(const TriangleMesh& mesh, const Transform& T_camera_object, const DepthImage& observed,
+/// The model as verification draws it: its mesh, or, for an object scanned as a point cloud (no
+/// triangles), its points splatted at their spacing.
+struct VerifyModel {
+  const TriangleMesh* mesh = nullptr;
+  std::span<const Eigen::Vector3f> points;
+  float point_spacing_m = 0.003f;
+};
+
+Verification verify_pose(const VerifyModel& model, const Transform& T_camera_object, const DepthImage& observed,
                          const CameraIntrinsics& K, std::span<const Eigen::Vector3f> cluster_points,
                          const VerifyOptions& options = {});
 

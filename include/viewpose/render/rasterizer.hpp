@@ -33,6 +33,12 @@ struct RenderedFrame {
 RenderedFrame render(std::span<const MeshInstance> instances, const CameraIntrinsics& K,
                      const RenderOptions& options = {});
 
+/// Points drawn as small squares (for models scanned as a point cloud, with no mesh): each point
+/// covers the pixels its `spacing_m` neighbourhood spans at its depth; the nearest point wins.
+/// Fills depth and instance (0); no normals.
+RenderedFrame render_points(std::span<const Eigen::Vector3f> points, const Transform& T_camera_object,
+                            const CameraIntrinsics& K, float spacing_m);
+
 /// One mesh seen from many poses (a view sphere), rendered in parallel.
 std::vector<RenderedFrame> render_views(const TriangleMesh& mesh, std::span<const Transform> T_camera_object,
                                         const CameraIntrinsics& K, const RenderOptions& options = {});
