@@ -13,27 +13,8 @@ namespace {
 
 using namespace viewpose;
 
-// A UV sphere of about `triangles` triangles, radius 10 cm.
-TriangleMesh sphere(int triangles) {
-  const int rings = static_cast<int>(std::sqrt(triangles / 4.0)), around = 2 * rings;
-  TriangleMesh m;
-  for (int i = 0; i <= rings; ++i)
-    for (int j = 0; j < around; ++j) {
-      const double th = std::numbers::pi * i / rings, ph = 2 * std::numbers::pi * j / around;
-      m.vertices.emplace_back(static_cast<float>(0.1 * std::sin(th) * std::cos(ph)),
-                              static_cast<float>(0.1 * std::sin(th) * std::sin(ph)), static_cast<float>(0.1 * std::cos(th)));
-    }
-  for (int i = 0; i < rings; ++i)
-    for (int j = 0; j < around; ++j) {
-      const auto a = static_cast<std::uint32_t>(i * around + j), b = static_cast<std::uint32_t>(i * around + (j + 1) % around);
-      m.triangles.push_back({a, b, b + static_cast<std::uint32_t>(around)});
-      m.triangles.push_back({a, b + static_cast<std::uint32_t>(around), a + static_cast<std::uint32_t>(around)});
-    }
-  return m;
-}
-
 void BM_Render100kTriangles(benchmark::State& state) {
-  const TriangleMesh mesh = sphere(100000);
+  const TriangleMesh mesh = make_sphere(0.1, 158);  // about 100k triangles
   const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
   const MeshInstance inst{&mesh, look_at({0, -0.25, 0.45}, {0, 0, 0})};  // the sphere fills a third of the frame
   state.SetLabel(std::to_string(mesh.triangles.size()) + " triangles");

@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "viewpose/core/mesh.hpp"
 #include "viewpose/core/point_cloud.hpp"
 
 namespace viewpose::test {
@@ -87,6 +88,14 @@ inline PointCloud sample_cloud(int width, int height, bool normals, bool colours
     if (labels) c.labels.push_back(static_cast<std::uint32_t>(rng() % 40));
   }
   return c;
+}
+
+/// A square of side 2 * half in the z = 0 plane (two triangles): a wall, a card, a floor tile.
+inline TriangleMesh square(float half) {
+  TriangleMesh m;
+  m.vertices = {{-half, -half, 0}, {half, -half, 0}, {half, half, 0}, {-half, half, 0}};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}};
+  return m;
 }
 
 /// Bitwise equality of float vectors, so that NaN == NaN.

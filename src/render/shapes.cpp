@@ -142,6 +142,17 @@ TriangleMesh make_mug(double radius, double height, double wall) {
   return mesh;
 }
 
+TriangleMesh make_sphere(double radius, int rings) {
+  if (!(radius > 0) || rings < 2) throw Error("sphere: radius must be positive and rings at least 2");
+  TriangleMesh mesh;
+  const int around = 2 * rings;
+  add_tube(mesh, rings + 1, around, [&](int i, int j) {
+    const double th = kPi * i / rings, ph = 2 * kPi * j / around;
+    return Eigen::Vector3d(radius * std::sin(th) * std::cos(ph), radius * std::sin(th) * std::sin(ph), radius * std::cos(th));
+  });
+  return mesh;
+}
+
 std::vector<std::string> shape_names() { return {"jug", "box", "can", "mug"}; }
 
 TriangleMesh make_named_shape(std::string_view name) {

@@ -11,14 +11,6 @@ namespace {
 
 const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
 
-// A square of side 2 * half in the object's z = 0 plane, facing +z and -z (two windings).
-TriangleMesh square(float half) {
-  TriangleMesh m;
-  m.vertices = {{-half, -half, 0}, {half, -half, 0}, {half, half, 0}, {-half, half, 0}};
-  m.triangles = {{0, 1, 2}, {0, 2, 3}};
-  return m;
-}
-
 Transform at(const Eigen::Vector3d& t, const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity()) { return make_transform(R, t); }
 
 RenderedFrame render_one(const TriangleMesh& mesh, const Transform& T, bool normals = false) {
@@ -29,7 +21,7 @@ RenderedFrame render_one(const TriangleMesh& mesh, const Transform& T, bool norm
 }
 
 TEST(Rasterizer, PlaneAtKnownDistanceFillsEveryPixelAtThatDepth) {
-  const TriangleMesh wall = square(10.0f);
+  const TriangleMesh wall = test::square(10.0f);
   const RenderedFrame f = render_one(wall, at({0, 0, 1.2}), true);
   ASSERT_EQ(f.depth.count_valid(), 640u * 480u);
   for (float z : f.depth.depth_m) ASSERT_NEAR(z, 1.2f, 1e-6f);
@@ -41,7 +33,7 @@ TEST(Rasterizer, TiltedPlaneIsPerspectiveCorrect) {
   // Plane z = 1 + 0.5 x: on the ray x = a z it meets z = 1 / (1 - 0.5 a), exactly.
   const double tilt = std::atan(0.5);
   const Eigen::Matrix3d R = Eigen::AngleAxisd(-tilt, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  const TriangleMesh wall = square(3.0f);
+  const TriangleMesh wall = test::square(3.0f);
   const RenderedFrame f = render_one(wall, at({0, 0, 1}, R));
   for (int u : {0, 100, 319, 500, 639}) {
     const double a = (u - K.cx) / K.fx;
@@ -64,23 +56,8 @@ TEST(Rasterizer, BoxFaceDepthAndSilhouette) {
 
 TEST(Rasterizer, SphereSilhouetteHasTheAnalyticRadius) {
   // A fine UV sphere; its outline seen from distance D has radius f R / sqrt(D^2 - R^2) pixels.
-  TriangleMesh sphere;
-  const int rings = 90, around = 180;
   const double R = 0.1, D = 0.8;
-  for (int i = 0; i <= rings; ++i) {
-    for (int j = 0; j < around; ++j) {
-      const double th = std::numbers::pi * i / rings, ph = 2 * std::numbers::pi * j / around;
-      sphere.vertices.emplace_back(static_cast<float>(R * std::sin(th) * std::cos(ph)),
-                                   static_cast<float>(R * std::sin(th) * std::sin(ph)), static_cast<float>(R * std::cos(th)));
-    }
-  }
-  for (int i = 0; i < rings; ++i) {
-    for (int j = 0; j < around; ++j) {
-      const auto a = static_cast<std::uint32_t>(i * around + j), b = static_cast<std::uint32_t>(i * around + (j + 1) % around);
-      sphere.triangles.push_back({a, b, b + around});
-      sphere.triangles.push_back({a, b + around, a + around});
-    }
-  }
+  const TriangleMesh sphere = make_sphere(R);
   const RenderedFrame f = render_one(sphere, at({0, 0, D}));
   const double r_px = K.fx * R / std::sqrt(D * D - R * R);
   const double area = static_cast<double>(f.depth.count_valid());
@@ -89,7 +66,7 @@ TEST(Rasterizer, SphereSilhouetteHasTheAnalyticRadius) {
 }
 
 TEST(Rasterizer, NearerSurfaceWinsAndInstancesAreLabelled) {
-  const TriangleMesh wall = square(5.0f), card = square(0.1f);
+  const TriangleMesh wall = test::square(5.0f), card = test::square(0.1f);
   const MeshInstance scene[] = {{&wall, at({0, 0, 2})}, {&card, at({0, 0, 1})}};
   const RenderedFrame f = render(scene, K);
   EXPECT_EQ(f.instance[240 * 640 + 320], 1);

@@ -12,13 +12,6 @@ namespace {
 
 const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
 
-TriangleMesh square(float half) {
-  TriangleMesh m;
-  m.vertices = {{-half, -half, 0}, {half, -half, 0}, {half, half, 0}, {-half, half, 0}};
-  m.triangles = {{0, 1, 2}, {0, 2, 3}};
-  return m;
-}
-
 RenderedFrame wall_at(double z, const TriangleMesh& wall) {
   const MeshInstance inst{&wall, make_transform(Eigen::Matrix3d::Identity(), {0, 0, z})};
   RenderOptions o;
@@ -45,7 +38,7 @@ std::pair<double, double> stats(const DepthImage& d) {
 TEST(SensorModel, NoiseOnAFlatWallHasTheDocumentedSigma) {
   // docs/SENSOR_MODEL.md: sigma(z) = 1.2 mm + 1.9 mm/m^2 (z - 0.4)^2 at normal incidence (Nguyen 2012),
   // quantization included: 1.88 mm at 1 m and 6.06 mm at 2 m.
-  const TriangleMesh wall = square(5.0f);
+  const TriangleMesh wall = test::square(5.0f);
   for (const double z : {1.0, 2.0}) {
     const auto [mean, sigma] = stats(simulate_sensor(wall_at(z, wall), K, SensorModel::kinect_v1(), 42));
     const double expected = axial_noise_sigma(z, 0.0);
@@ -61,7 +54,7 @@ TEST(SensorModel, DisparityQuantizationMakesDiscreteDepthLevels) {
   m.quantize = true;
   // At 2 m the levels are z^2 / (8 fx b) = 12.7 mm apart for fx = 525, b = 7.5 cm.
   EXPECT_NEAR(quantization_step(2.0, K.fx, m), 4.0 / (8 * 525 * 0.075), 1e-12);
-  const TriangleMesh wall = square(5.0f);
+  const TriangleMesh wall = test::square(5.0f);
   const DepthImage d = simulate_sensor(wall_at(2.0, wall), K, m, 1);
   const double disparity = K.fx * m.baseline_m / d.at(320, 240);
   EXPECT_NEAR(disparity * 8, std::round(disparity * 8), 1e-3);  // a whole number of 1/8 pixels
@@ -69,14 +62,14 @@ TEST(SensorModel, DisparityQuantizationMakesDiscreteDepthLevels) {
 }
 
 TEST(SensorModel, IdealModelPassesTheRenderThroughUnchanged) {
-  const TriangleMesh wall = square(5.0f);
+  const TriangleMesh wall = test::square(5.0f);
   const RenderedFrame f = wall_at(1.3, wall);
   const DepthImage d = simulate_sensor(f, K, SensorModel::ideal(), 7);
   EXPECT_EQ(std::memcmp(d.depth_m.data(), f.depth.depth_m.data(), d.depth_m.size() * sizeof(float)), 0);
 }
 
 TEST(SensorModel, SameSeedSameFrameOtherSeedOtherNoise) {
-  const TriangleMesh wall = square(5.0f);
+  const TriangleMesh wall = test::square(5.0f);
   const RenderedFrame f = wall_at(1.5, wall);
   const DepthImage a = simulate_sensor(f, K, SensorModel::kinect_v1(), 3);
   const DepthImage b = simulate_sensor(f, K, SensorModel::kinect_v1(), 3);
@@ -86,7 +79,7 @@ TEST(SensorModel, SameSeedSameFrameOtherSeedOtherNoise) {
 }
 
 TEST(SensorModel, OutputDoesNotDependOnTheThreadCount) {
-  const TriangleMesh wall = square(5.0f), card = square(0.2f);
+  const TriangleMesh wall = test::square(5.0f), card = test::square(0.2f);
   const MeshInstance scene[] = {{&wall, make_transform(Eigen::Matrix3d::Identity(), {0, 0, 2.0})},
                                 {&card, make_transform(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY()).toRotationMatrix(), {0.1, 0, 1.0})}};
   RenderOptions o;
@@ -104,7 +97,7 @@ TEST(SensorModel, OutputDoesNotDependOnTheThreadCount) {
 TEST(SensorModel, ProjectorShadowFallsLeftOfAnObjectWithTheExpectedWidth) {
   // A card at 1 m in front of a wall at 1.5 m; the projector 7.5 cm to the right (+x) cannot light
   // fx b (1/1 - 1/1.5) = 13.1 pixels of wall just left of the card.
-  const TriangleMesh wall = square(5.0f), card = square(0.15f);
+  const TriangleMesh wall = test::square(5.0f), card = test::square(0.15f);
   const MeshInstance scene[] = {{&wall, make_transform(Eigen::Matrix3d::Identity(), {0, 0, 1.5})},
                                 {&card, make_transform(Eigen::Matrix3d::Identity(), {0, 0, 1.0})}};
   RenderOptions o;
@@ -123,7 +116,7 @@ TEST(SensorModel, ProjectorShadowFallsLeftOfAnObjectWithTheExpectedWidth) {
 }
 
 TEST(SensorModel, RangeLimitsAndGrazingAnglesLoseData) {
-  const TriangleMesh wall = square(20.0f);
+  const TriangleMesh wall = test::square(20.0f);
   SensorModel m = SensorModel::ideal();
   m.range_limits = true;
   EXPECT_EQ(simulate_sensor(wall_at(5.0, wall), K, m, 1).count_valid(), 0u);
@@ -160,7 +153,7 @@ TEST(SensorModel, RangeLimitsAndGrazingAnglesLoseData) {
 }
 
 TEST(SensorModel, RefusesFramesWithoutNormals) {
-  const TriangleMesh wall = square(5.0f);
+  const TriangleMesh wall = test::square(5.0f);
   const MeshInstance inst{&wall, make_transform(Eigen::Matrix3d::Identity(), {0, 0, 1})};
   const RenderedFrame f = render(std::span(&inst, 1), K);
   test::expect_error([&] { simulate_sensor(f, K, SensorModel::kinect_v1(), 1); }, "no normals");

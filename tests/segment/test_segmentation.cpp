@@ -7,6 +7,7 @@
 #include "viewpose/describe/normals.hpp"
 #include "viewpose/io/pcd.hpp"
 #include "viewpose/render/rasterizer.hpp"
+#include "viewpose/render/shapes.hpp"
 #include "viewpose/segment/segmentation.hpp"
 #include "viewpose/segment/voxel_grid.hpp"
 
@@ -100,20 +101,7 @@ TEST(Clusters, SeparatedBoxesAreSeparateClustersInBothVersions) {
 
 TEST(Normals, SphereNormalsAreRadialWithinTwoDegrees) {
   // A 10 cm sphere seen from 0.6 m, rendered and unprojected: normals point out of its centre.
-  TriangleMesh sphere;
-  const int rings = 90, around = 180;
-  for (int i = 0; i <= rings; ++i)
-    for (int j = 0; j < around; ++j) {
-      const double th = std::numbers::pi * i / rings, ph = 2 * std::numbers::pi * j / around;
-      sphere.vertices.emplace_back(static_cast<float>(0.1 * std::sin(th) * std::cos(ph)),
-                                   static_cast<float>(0.1 * std::sin(th) * std::sin(ph)), static_cast<float>(0.1 * std::cos(th)));
-    }
-  for (int i = 0; i < rings; ++i)
-    for (int j = 0; j < around; ++j) {
-      const auto a = static_cast<std::uint32_t>(i * around + j), b = static_cast<std::uint32_t>(i * around + (j + 1) % around);
-      sphere.triangles.push_back({a, b, b + around});
-      sphere.triangles.push_back({a, b + around, a + around});
-    }
+  const TriangleMesh sphere = make_sphere(0.1);
   const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
   const Eigen::Vector3f centre(0, 0, 0.6f);
   const MeshInstance inst{&sphere, make_transform(Eigen::Matrix3d::Identity(), centre.cast<double>())};

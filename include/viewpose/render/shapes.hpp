@@ -31,6 +31,10 @@ TriangleMesh make_can(double radius = 0.033, double height = 0.123, int segments
 /// A mug: an open cylinder with a wall, a bottom and a handle.
 TriangleMesh make_mug(double radius = 0.041, double height = 0.095, double wall = 0.004);
 
+/// A UV sphere centred on the origin: `rings` rings from pole to pole, twice as many segments
+/// around (about 4 rings^2 triangles).
+TriangleMesh make_sphere(double radius, int rings = 90);
+
 /// Names make_named_shape knows: "jug", "box", "can", "mug".
 std::vector<std::string> shape_names();
 /// The shape of that name at its default size ("box" is a 6 x 9.5 x 20 cm carton); throws
