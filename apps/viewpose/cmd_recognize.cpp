@@ -62,7 +62,9 @@ nlohmann::json to_json(const Recognition& r) {
                     {"cluster_points", d.cluster_points},
                     {"verification", {{"inlier_fraction", d.verification.inlier_fraction},
                                       {"conflict_fraction", d.verification.conflict_fraction},
-                                      {"cluster_explained", d.verification.cluster_explained}}}});
+                                      {"cluster_explained", d.verification.cluster_explained},
+                                      {"model_support", d.verification.model_support},
+                                      {"visible_fraction", d.verification.visible_fraction}}}});
   }
   const StageTimes& t = r.times;
   return {{"detections", dets}, {"clusters", r.clusters}, {"hypotheses", r.hypotheses},

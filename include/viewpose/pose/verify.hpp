@@ -26,6 +26,15 @@ struct VerifyOptions {
   double min_inlier_fraction = 0.7;    ///< of the model's judged pixels that are not occluded
   double max_conflict_fraction = 0.15;
   double min_cluster_explained = 0.7;  ///< of the scene cluster's points
+  /// Of the model's inlier pixels (where the observed surface is the model's), at least this share
+  /// must belong to the cluster: a small patch of clutter that a curved model happens to fit, with
+  /// the rest of the model lying on other things, is not an object. Measured in pixels, so it does
+  /// not depend on how densely the sensor samples at that distance.
+  double min_model_support = 0.5;
+  /// At least this share of the model's outline must be seen matching (not hidden, not unmeasured):
+  /// a global descriptor says little about an object mostly out of sight, and such hypotheses were
+  /// the false positives on real clutter (measured: true detections 0.57 to 1.0, clutter 0.09, 0.37).
+  double min_visible_fraction = 0.4;
   std::size_t min_inliers = 150;
 };
 
@@ -35,6 +44,8 @@ struct Verification {
   double inlier_fraction = 0;
   double conflict_fraction = 0;
   double cluster_explained = 0;
+  double model_support = 0;  ///< share of the model's inlier pixels that the cluster covers
+  double visible_fraction = 0;  ///< inliers / every interior model pixel (hidden and unmeasured ones too)
   std::size_t inliers = 0, conflicts = 0, occluded = 0, unknown = 0;
 };
 
@@ -45,7 +56,7 @@ float depth_tolerance(float z_m, const VerifyOptions& options);
 /// triangles), its points splatted at their spacing.
 struct VerifyModel {
   const TriangleMesh* mesh = nullptr;
-  std::span<const Eigen::Vector3f> points;
+  std::span<const Eigen::Vector3f> points;  ///< the model cloud (voxel grid of the views), object frame
   float point_spacing_m = 0.003f;
 };
 
