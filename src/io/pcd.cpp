@@ -232,6 +232,15 @@ PcdHeader parse_header(std::span<const std::uint8_t> bytes, std::string_view nam
   return h;
 }
 
+// Sizes the cloud's points and the attributes the file has, for n points.
+void allocate(PointCloud& cloud, const FieldSlots& s, std::size_t n) {
+  cloud.points.resize(n);
+  if (s.nx >= 0) cloud.normals.resize(n);
+  if (s.curvature >= 0) cloud.curvature.resize(n);
+  if (s.rgba >= 0) cloud.rgba.resize(n);
+  if (s.label >= 0) cloud.labels.resize(n);
+}
+
 // Fills the cloud from the binary data; value_ptr(i, slot) points at point i's value of a field, so
 // the point-major (binary) and field-major (binary_compressed) layouts share this code.
 template <typename ValuePtr>
@@ -239,11 +248,7 @@ void fill_cloud(PointCloud& cloud, const PcdHeader& h, const Layout& L, ValuePtr
   const FieldSlots& s = L.slots;
   const auto field = [&](int slot) -> const PcdField& { return h.fields[static_cast<std::size_t>(slot)]; };
   const std::size_t n = h.points;
-  cloud.points.resize(n);
-  if (s.nx >= 0) cloud.normals.resize(n);
-  if (s.curvature >= 0) cloud.curvature.resize(n);
-  if (s.rgba >= 0) cloud.rgba.resize(n);
-  if (s.label >= 0) cloud.labels.resize(n);
+  allocate(cloud, s, n);
   for (std::size_t i = 0; i < n; ++i) {
     const auto get = [&](int slot) { return static_cast<float>(read_scalar(value_ptr(i, slot), field(slot))); };
     cloud.points[i] = {get(s.x), get(s.y), get(s.z)};
@@ -269,11 +274,7 @@ void read_ascii(PointCloud& cloud, const PcdHeader& h, const Layout& L, std::spa
   }
   const FieldSlots& s = L.slots;
   const std::size_t n = h.points;
-  cloud.points.resize(n);
-  if (s.nx >= 0) cloud.normals.resize(n);
-  if (s.curvature >= 0) cloud.curvature.resize(n);
-  if (s.rgba >= 0) cloud.rgba.resize(n);
-  if (s.label >= 0) cloud.labels.resize(n);
+  allocate(cloud, s, n);
   text::LineReader lines(data);
   std::string_view line;
   std::vector<std::string_view> tokens;
