@@ -46,7 +46,7 @@ void add_demo_command(CLI::App& app, int& exit_code) {
 
     SeedExperimentOptions setup;
     setup.orientations = *orientations;
-    const SimDataset scenes = make_seed_experiment(SimObject{1, "jug", jug.mesh}, K, setup, 7);
+    const SimDataset scenes = make_seed_experiment(ObjectModel{1, "jug", jug.mesh}, K, setup, 7);
     const Recognizer recognizer(db);
     const double threshold = 0.1 * db.objects[0].diameter_m;
     write_file_atomic(dir / "camera.json", format_bop_camera({K, 1.0}));

@@ -23,12 +23,6 @@ namespace viewpose::cli {
 
 namespace fs = std::filesystem;
 
-std::vector<SimObject> load_objects(const std::vector<std::string>& models, LengthUnit unit) {
-  std::vector<SimObject> objects;
-  for (ObjectModel& m : load_models(models, unit)) objects.push_back({m.id, m.name, std::move(m.mesh)});
-  return objects;
-}
-
 void write_contact_sheet(const fs::path& dataset, const std::string& split, const fs::path& out, std::size_t count) {
   // Read back through the BOP reader, as any user of the dataset would.
   const BopDataset ds = open_bop_dataset(dataset, split);
@@ -100,7 +94,7 @@ void add_simulate_command(CLI::App& app, int& exit_code) {
         K.height = 480;
       }
     }
-    const std::vector<SimObject> objects = load_objects(o->models, parse_length_unit(o->unit));
+    const std::vector<ObjectModel> objects = load_models(o->models, parse_length_unit(o->unit));
     SimDataset ds;
     if (o->preset == "seed-experiment") {
       if (objects.size() != 1) throw Error("simulate: the seed experiment takes exactly one --model");

@@ -1,13 +1,8 @@
 #include "viewpose/describe/describe.hpp"
 
-#include <chrono>
+#include "viewpose/core/stopwatch.hpp"
 
 namespace viewpose {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
-}  // namespace
 
 Description describe(PointCloud points, const DescribeOptions& options, DescribeTimes* times) {
   auto t = Clock::now();

@@ -1,6 +1,6 @@
 #include "viewpose/recognize/recognizer.hpp"
 
-#include <chrono>
+#include "viewpose/core/stopwatch.hpp"
 #include <cmath>
 
 #include <fmt/format.h>
@@ -10,11 +10,6 @@
 #include "viewpose/segment/voxel_grid.hpp"
 
 namespace viewpose {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
-}  // namespace
 
 Recognizer::Recognizer(const ViewDatabase& db, RecognizerOptions options) : db_(db), options_(std::move(options)) {
   if (db.views.empty()) throw Error("recognize: the view database holds no views");
@@ -51,6 +46,7 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     const std::vector<Eigen::Vector3f> icp_source = voxel_downsample(d.cloud, options_.icp_voxel_m).points;
 
     std::optional<Detection> best;
+    std::uint32_t best_object = 0;  // index into db_.objects of the best detection
     for (std::size_t rank = 0; rank < matches.size() && !(best && !options_.keep_best); ++rank) {
       const ViewEntry& view = db_.views[matches[rank].view];
       const DatabaseObject& object = db_.objects[view.object];
@@ -82,16 +78,14 @@ Recognition Recognizer::recognize(const Frame& frame) const {
         det.cluster_points = d.cloud.size();
         det.verification = v;
         best = det;
+        best_object = view.object;
         if (!options_.keep_best) break;
       }
     }
     if (best && options_.try_half_turns) {
       // The same pose turned about the object's own axes, each refined and verified.
-      const DatabaseObject* object = nullptr;
-      std::uint32_t object_index = 0;
-      for (std::uint32_t i = 0; i < db_.objects.size(); ++i) {
-        if (db_.objects[i].id == best->object_id) { object = &db_.objects[i]; object_index = i; }
-      }
+      const DatabaseObject* object = &db_.objects[best_object];
+      const std::uint32_t object_index = best_object;
       const BoundingBox box = bounding_box(object->model_points);
       const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
       Detection chosen = *best;

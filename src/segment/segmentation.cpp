@@ -2,14 +2,9 @@
 
 #include "viewpose/segment/voxel_grid.hpp"
 
-#include <chrono>
+#include "viewpose/core/stopwatch.hpp"
 
 namespace viewpose {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
-}  // namespace
 
 Segmentation segment_scene(const PointCloud& frame, const SegmentOptions& options, SegmentTimes* times) {
   Segmentation s;

@@ -30,12 +30,12 @@ void write_bop_dataset(const fs::path& dir, const SimDataset& ds, const BopWrite
 
   write_file_atomic(dir / "camera.json", format_bop_camera({ds.K, options.depth_scale_mm}));
   ModelsInfo models;
-  for (const SimObject& o : ds.objects) {
+  for (const ObjectModel& o : ds.objects) {
     TriangleMesh mm = o.mesh;  // BOP models are in millimetres
     for (auto& v : mm.vertices) v *= 1000.0f;
     mm.normals.clear();
-    write_ply(dir / "models" / fmt::format("obj_{:06d}.ply", o.obj_id), mm, PlyEncoding::BinaryLittleEndian);
-    models[o.obj_id] = model_info(o.mesh);
+    write_ply(dir / "models" / fmt::format("obj_{:06d}.ply", o.id), mm, PlyEncoding::BinaryLittleEndian);
+    models[o.id] = model_info(o.mesh);
   }
   write_file_atomic(dir / "models" / "models_info.json", format_models_info(models));
 

@@ -46,7 +46,7 @@ double footprint_radius(const TriangleMesh& mesh) {
 
 }  // namespace
 
-SimDataset make_seed_experiment(const SimObject& object, const CameraIntrinsics& K, const SeedExperimentOptions& options,
+SimDataset make_seed_experiment(const ObjectModel& object, const CameraIntrinsics& K, const SeedExperimentOptions& options,
                                 std::uint64_t seed) {
   K.validate();
   if (options.orientations < 1 || options.distances_m.empty()) throw Error("seed experiment: need distances and orientations");
@@ -90,7 +90,7 @@ SimDataset make_seed_experiment(const SimObject& object, const CameraIntrinsics&
   return ds;
 }
 
-SimDataset make_clutter(const std::vector<SimObject>& objects, const CameraIntrinsics& K, const ClutterOptions& options,
+SimDataset make_clutter(const std::vector<ObjectModel>& objects, const CameraIntrinsics& K, const ClutterOptions& options,
                         std::uint64_t seed) {
   K.validate();
   if (objects.empty()) throw Error("clutter: no objects to place");
@@ -184,7 +184,7 @@ SimulatedFrame simulate_image(const SimDataset& ds, const SimImage& image, const
     if (u_max >= 0) info.bbox_obj = {u_min, v_min, u_max - u_min + 1, v_max - v_min + 1};
     if (vu_max >= 0) info.bbox_visib = {vu_min, vv_min, vu_max - vu_min + 1, vv_max - vv_min + 1};
     info.visib_fract = info.px_count_all > 0 ? static_cast<double>(info.px_count_visib) / info.px_count_all : 0.0;
-    out.gt.push_back({ds.objects[image.objects[i].object].obj_id, image.objects[i].T_camera_object});
+    out.gt.push_back({ds.objects[image.objects[i].object].id, image.objects[i].T_camera_object});
     out.gt_info.push_back(info);
   }
   return out;

@@ -39,7 +39,7 @@ TEST(Recognize, NoiseFreeJugAtOneMetreWithinFiveMillimetresAndTwoDegrees) {
   SeedExperimentOptions setup;
   setup.distances_m = {1.0};
   setup.orientations = 3;
-  const SimDataset ds = make_seed_experiment(SimObject{1, "jug", make_jug()}, K, setup, 21);
+  const SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, setup, 21);
   for (const SimImage& image : ds.scenes[0].images) {
     const SimulatedFrame f = simulate_image(ds, image, SensorModel::ideal(), 1);
     const Recognition r = recognizer.recognize(frame_from_depth(f.depth, K));
@@ -58,7 +58,7 @@ TEST(Recognize, NoisySeedExperimentSubsetMeetsAddSWithoutFalsePositives) {
   SeedExperimentOptions setup;
   setup.orientations = 3;  // x 5 distances, 0.75 to 2.00 m
   const TriangleMesh jug = make_jug();
-  const SimDataset ds = make_seed_experiment(SimObject{1, "jug", jug}, K, setup, 33);
+  const SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", jug}, K, setup, 33);
   const double threshold = 0.1 * db.objects[0].diameter_m;
   int frames = 0, correct = 0, false_positives = 0;
   for (const SimScene& scene : ds.scenes) {
@@ -79,7 +79,7 @@ TEST(Recognize, NoisySeedExperimentSubsetMeetsAddSWithoutFalsePositives) {
 
 TEST(Recognize, FrameWithNoKnownObjectGivesNoDetection) {
   // A can and a mug on the table, but a database of the jug only.
-  SimDataset ds = make_seed_experiment(SimObject{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
+  SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
   ds.objects = {{7, "can", make_can()}, {8, "mug", make_mug()}};
   const Transform& T = ds.scenes[0].images[0].objects[0].T_camera_object;
   const Transform left = T * make_transform(Eigen::Matrix3d::Identity(), {-0.12, 0, -0.09});
@@ -94,7 +94,7 @@ TEST(Recognize, FrameWithNoKnownObjectGivesNoDetection) {
 
 TEST(Recognize, TwoObjectFrameGivesBothWithTheRightIds) {
   const ViewDatabase& db = jug_and_can_db();
-  SimDataset ds = make_seed_experiment(SimObject{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
+  SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
   ds.objects = {{1, "jug", make_jug()}, {2, "can", make_can()}};
   const Transform& jug_pose = ds.scenes[0].images[0].objects[0].T_camera_object;
   // The can stands on the table 25 cm to the jug's side: its base 15.35 cm below the jug's centre

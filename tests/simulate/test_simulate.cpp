@@ -33,7 +33,7 @@ TEST(Simulate, VisibilityFractionAgainstAKnownOccluder) {
 }
 
 TEST(Simulate, SeedExperimentPutsTheNearestSurfaceAtEachDistance) {
-  SimObject jug{1, "jug", make_jug()};
+  ObjectModel jug{1, "jug", make_jug()};
   SeedExperimentOptions o;
   o.orientations = 4;
   const SimDataset ds = make_seed_experiment(jug, K, o, 5);
@@ -67,7 +67,7 @@ TEST(Simulate, SeedExperimentPutsTheNearestSurfaceAtEachDistance) {
 
 TEST(Simulate, DatasetReadsBackThroughTheBopReaderWithItsGroundTruth) {
   test::TempDir dir;
-  SimObject jug{7, "jug", make_jug()};
+  ObjectModel jug{7, "jug", make_jug()};
   SeedExperimentOptions o;
   o.orientations = 2;
   o.distances_m = {0.75, 1.5};
@@ -110,7 +110,7 @@ TEST(Simulate, DatasetReadsBackThroughTheBopReaderWithItsGroundTruth) {
 }
 
 TEST(Simulate, ClutterPlacesTwoToFiveObjectsThatDoNotOverlap) {
-  std::vector<SimObject> objects;
+  std::vector<ObjectModel> objects;
   for (const auto& name : shape_names()) objects.push_back({static_cast<int>(objects.size()) + 1, name, make_named_shape(name)});
   ClutterOptions o;
   o.images = 6;

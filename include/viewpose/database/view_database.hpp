@@ -12,6 +12,7 @@
 #include "viewpose/core/camera.hpp"
 #include "viewpose/core/depth_image.hpp"
 #include "viewpose/core/mesh.hpp"
+#include "viewpose/core/object_model.hpp"
 #include "viewpose/core/transform.hpp"
 #include "viewpose/describe/describe.hpp"
 
@@ -56,12 +57,6 @@ struct ViewDatabase {
   static ViewDatabase load(const std::filesystem::path& path);
   std::vector<std::uint8_t> serialize() const;
   static ViewDatabase deserialize(std::span<const std::uint8_t> bytes, std::string_view name);
-};
-
-struct ObjectModel {
-  int id = 0;
-  std::string name;
-  TriangleMesh mesh;  ///< metres, object frame
 };
 
 /// Renders every object from the view sphere around its bounding-box centre and describes each

@@ -8,17 +8,12 @@
 #include "viewpose/core/camera.hpp"
 #include "viewpose/core/depth_image.hpp"
 #include "viewpose/core/mesh.hpp"
+#include "viewpose/core/object_model.hpp"
 #include "viewpose/core/transform.hpp"
 #include "viewpose/io/bop.hpp"
 #include "viewpose/render/sensor_model.hpp"
 
 namespace viewpose {
-
-struct SimObject {
-  int obj_id = 1;
-  std::string name;
-  TriangleMesh mesh;  ///< metres, object frame (BOP: origin at the bounding-box centre)
-};
 
 struct ObjectPlacement {
   std::size_t object = 0;  ///< index into SimDataset::objects
@@ -37,7 +32,7 @@ struct SimScene {
 
 struct SimDataset {
   CameraIntrinsics K;
-  std::vector<SimObject> objects;
+  std::vector<ObjectModel> objects;
   TriangleMesh table;  ///< the support surface seen in every image (may be empty)
   Transform T_camera_table = Transform::Identity();
   std::vector<SimScene> scenes;
@@ -53,7 +48,7 @@ struct SeedExperimentOptions {
   double camera_height_m = 0.45;   ///< above the table top
   double camera_pitch_deg = 18.0;  ///< looking down
 };
-SimDataset make_seed_experiment(const SimObject& object, const CameraIntrinsics& K,
+SimDataset make_seed_experiment(const ObjectModel& object, const CameraIntrinsics& K,
                                 const SeedExperimentOptions& options, std::uint64_t seed);
 
 /// Two to five objects standing on a table, touching and partly hiding each other.
@@ -64,7 +59,7 @@ struct ClutterOptions {
   double min_distance_m = 0.8;  ///< horizontal distance of the group from the camera
   double max_distance_m = 1.3;
 };
-SimDataset make_clutter(const std::vector<SimObject>& objects, const CameraIntrinsics& K, const ClutterOptions& options,
+SimDataset make_clutter(const std::vector<ObjectModel>& objects, const CameraIntrinsics& K, const ClutterOptions& options,
                         std::uint64_t seed);
 
 /// One image as the sensor reports it, with its ground truth.
