@@ -29,15 +29,19 @@ namespace {
 struct RecognizeFlags {
   std::string db;
   bool keep_best = false;
+  bool no_split = false;
   std::size_t matches = 20;
   void add_to(CLI::App& cmd) {
     cmd.add_option("--db", db, "View database (viewpose db build)")->required()->check(CLI::ExistingFile);
     cmd.add_flag("--keep-best", keep_best, "Try every hypothesis and keep the best, not the first that passes");
+    cmd.add_flag("--no-split", no_split,
+                 "Do not split clusters in which nothing is found at concave creases (touching objects); faster");
     cmd.add_option("--matches", matches, "Nearest views tried per cluster")->check(CLI::Range(1, 1000))->capture_default_str();
   }
   RecognizerOptions options() const {
     RecognizerOptions o;
     o.keep_best = keep_best;
+    o.split_touching = !no_split;
     o.matches = matches;
     return o;
   }
@@ -59,15 +63,17 @@ nlohmann::json to_json(const Recognition& r) {
                     {"R", {R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2)}},
                     {"t_m", {t.x(), t.y(), t.z()}}, {"score", d.score}, {"icp_fitness", d.icp_fitness},
                     {"icp_rmse_m", d.icp_rmse_m}, {"match_rank", d.match_rank}, {"roll_deg", d.roll_deg},
-                    {"cluster_points", d.cluster_points},
+                    {"cluster_points", d.cluster_points}, {"from_split_cluster", d.from_split_cluster},
+                    {"runner_up_score", d.runner_up_score},
                     {"verification", {{"inlier_fraction", d.verification.inlier_fraction},
                                       {"conflict_fraction", d.verification.conflict_fraction},
                                       {"cluster_explained", d.verification.cluster_explained},
                                       {"model_support", d.verification.model_support},
-                                      {"visible_fraction", d.verification.visible_fraction}}}});
+                                      {"visible_fraction", d.verification.visible_fraction},
+                                      {"unmeasured_fraction", d.verification.unmeasured_fraction}}}});
   }
   const StageTimes& t = r.times;
-  return {{"detections", dets}, {"clusters", r.clusters}, {"hypotheses", r.hypotheses},
+  return {{"detections", dets}, {"clusters", r.clusters}, {"split_clusters", r.split_clusters}, {"hypotheses", r.hypotheses},
           {"times_ms", {{"downsample", t.downsample_ms}, {"segment", t.segment_ms}, {"normals", t.normals_ms},
                         {"vfh", t.vfh_ms}, {"match", t.match_ms}, {"crh", t.crh_ms}, {"icp", t.icp_ms},
                         {"verify", t.verify_ms}, {"total", t.total_ms}}}};

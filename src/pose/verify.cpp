@@ -81,6 +81,8 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
   v.inlier_fraction = judged ? static_cast<double>(v.inliers) / static_cast<double>(judged) : 0.0;
   const std::size_t all = v.inliers + v.conflicts + v.occluded + v.unknown;
   v.visible_fraction = all ? static_cast<double>(v.inliers) / static_cast<double>(all) : 0.0;
+  const std::size_t unhidden = v.inliers + v.conflicts + v.unknown;
+  v.unmeasured_fraction = unhidden ? static_cast<double>(v.unknown) / static_cast<double>(unhidden) : 0.0;
   v.model_support = v.inliers ? static_cast<double>(supported) / static_cast<double>(v.inliers) : 0.0;
   v.conflict_fraction = judged ? static_cast<double>(v.conflicts) / static_cast<double>(judged) : 0.0;
   // The other way round: how much of the cluster lies on the model's surface (within a pixel).
@@ -103,7 +105,8 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
   v.score = v.inlier_fraction * v.cluster_explained;
   v.accepted = v.inliers >= o.min_inliers && v.inlier_fraction >= o.min_inlier_fraction &&
                v.conflict_fraction <= o.max_conflict_fraction && v.cluster_explained >= o.min_cluster_explained &&
-               v.model_support >= o.min_model_support && v.visible_fraction >= o.min_visible_fraction;
+               v.model_support >= o.min_model_support && v.visible_fraction >= o.min_visible_fraction &&
+               v.unmeasured_fraction <= o.max_unmeasured_fraction;
   return v;
 }
 

@@ -1,12 +1,15 @@
 #include "viewpose/recognize/recognizer.hpp"
 
 #include "viewpose/core/stopwatch.hpp"
+#include <algorithm>
 #include <cmath>
+#include <span>
 
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
 #include "viewpose/database/matching.hpp"
+#include "viewpose/segment/convex_segments.hpp"
 #include "viewpose/segment/voxel_grid.hpp"
 
 namespace viewpose {
@@ -31,97 +34,192 @@ Recognition Recognizer::recognize(const Frame& frame) const {
   out.times.downsample_ms = seg_times.downsample_ms;
   out.times.segment_ms = seg_times.planes_ms + seg_times.clusters_ms;
   out.clusters = seg.clusters.size();
-  for (const Cluster& cluster : seg.clusters) {
-    PointCloud points = cluster_points(seg.points, cluster);
-    if (bounding_box(points.points).diagonal() > options_.max_cluster_size_factor * largest_diameter_m_) continue;
-    DescribeTimes dt;
-    const Description d = describe(points, db_.params.describe, &dt);
-    out.times.normals_ms += dt.normals_ms;
-    out.times.vfh_ms += dt.vfh_ms;
-    out.times.crh_ms += dt.crh_ms;
-    if (d.cloud.size() < 3) continue;
-    auto t = Clock::now();
-    const std::vector<Match> matches = nearest_views_per_object(db_, d.vfh, options_.matches);
-    out.times.match_ms += ms_since(t);
-    const std::vector<Eigen::Vector3f> icp_source = voxel_downsample(d.cloud, options_.icp_voxel_m).points;
-
-    std::optional<Detection> best;
-    std::uint32_t best_object = 0;  // index into db_.objects of the best detection
-    for (std::size_t rank = 0; rank < matches.size() && !(best && !options_.keep_best); ++rank) {
-      const ViewEntry& view = db_.views[matches[rank].view];
-      const DatabaseObject& object = db_.objects[view.object];
-      t = Clock::now();
-      const std::vector<float> rolls = crh_roll_angles(view.crh, d.crh, options_.roll);
-      out.times.crh_ms += ms_since(t);
-      for (const float roll : rolls) {
-        const Transform T0 = crh_alignment(view.centroid.cast<double>(), d.centroid.cast<double>(), roll) * view.T_view_object;
-        t = Clock::now();
-        const IcpResult icp = icp_point_to_plane(icp_source, *targets_[view.object], T0.inverse(), options_.icp);
-        out.times.icp_ms += ms_since(t);
-        ++out.hypotheses;
-        if (icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
-        const Transform T = icp.T_target_source.inverse();
-        t = Clock::now();
-        const Verification v = verify_pose({&object.mesh, object.model_points, db_.params.voxel_m}, T, frame.depth, frame.K,
-                                           d.cloud.points, options_.verify);
-        out.times.verify_ms += ms_since(t);
-        if (!v.accepted || (best && best->score >= v.score)) continue;
-        Detection det;
-        det.object_id = object.id;
-        det.object_name = object.name;
-        det.T_camera_object = T;
-        det.score = v.score;
-        det.icp_fitness = icp.fitness;
-        det.icp_rmse_m = icp.inlier_rmse;
-        det.match_rank = static_cast<int>(rank);
-        det.roll_deg = roll;
-        det.cluster_points = d.cloud.size();
-        det.verification = v;
-        best = det;
-        best_object = view.object;
-        if (!options_.keep_best) break;
-      }
-    }
-    if (best && options_.try_half_turns) {
-      // The same pose turned about the object's own axes, each refined and verified.
-      const DatabaseObject* object = &db_.objects[best_object];
-      const std::uint32_t object_index = best_object;
-      const BoundingBox box = bounding_box(object->model_points);
-      const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
-      Detection chosen = *best;
-      double runner_up = 0;
-      for (int axis = 0; axis < 3; ++axis) {
-        // Half a turn about the axis through the box centre, in the object frame.
-        const Eigen::Matrix3d R = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
-        const Transform turn = make_transform(R, centre - R * centre);
-        t = Clock::now();
-        const IcpResult icp = icp_point_to_plane(icp_source, *targets_[object_index], (best->T_camera_object * turn).inverse(), options_.icp);
-        out.times.icp_ms += ms_since(t);
-        const Transform T = icp.T_target_source.inverse();
-        t = Clock::now();
-        const Verification v = verify_pose({&object->mesh, object->model_points, db_.params.voxel_m}, T, frame.depth,
-                                           frame.K, d.cloud.points, options_.verify);
-        out.times.verify_ms += ms_since(t);
-        ++out.hypotheses;
-        if (!v.accepted) continue;
-        if (v.score > chosen.score) {
-          runner_up = std::max(runner_up, chosen.score);
-          chosen.T_camera_object = T;
-          chosen.score = v.score;
-          chosen.icp_fitness = icp.fitness;
-          chosen.icp_rmse_m = icp.inlier_rmse;
-          chosen.verification = v;
-        } else {
-          runner_up = std::max(runner_up, v.score);
-        }
-      }
-      chosen.runner_up_score = runner_up;
-      best = chosen;
-    }
-    if (best) out.detections.push_back(*best);
-  }
+  for (const Cluster& cluster : seg.clusters) recognize_region(cluster_points(seg.points, cluster), frame, out, 0);
   out.times.total_ms = ms_since(start);
   return out;
+}
+
+void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, Recognition& out, int depth) const {
+  // Anything found inside a split cluster stands on less evidence than an isolated cluster, and is
+  // checked more strictly.
+  VerifyOptions part_verify = options_.verify;
+  part_verify.max_unmeasured_fraction = std::min(part_verify.max_unmeasured_fraction, options_.part_max_unmeasured_fraction);
+  part_verify.min_inlier_fraction = std::max(part_verify.min_inlier_fraction, options_.part_min_inlier_fraction);
+  part_verify.min_cluster_explained = std::max(part_verify.min_cluster_explained, options_.part_min_cluster_explained);
+  const double size = bounding_box(points.points).diagonal();
+  if (size <= options_.max_cluster_size_factor * largest_diameter_m_) {
+    if (std::optional<Detection> det = recognize_cluster(points, frame, depth > 0 ? part_verify : options_.verify, out)) {
+      det->from_split_cluster = depth > 0;
+      recognize_rest(points, std::move(*det), frame, out, depth);
+      return;
+    }
+  }
+  // Nothing passed: the region may be objects touching each other. Try its convex parts, largest
+  // first. Two objects side by side span at most twice the largest object.
+  if (!options_.split_touching || depth >= options_.max_split_depth ||
+      size > options_.max_split_size_factor * largest_diameter_m_) {
+    return;
+  }
+  auto t = Clock::now();
+  const std::vector<Cluster> parts = convex_segments(points, options_.split);
+  out.times.segment_ms += ms_since(t);
+  // One part that is nearly the whole region has been tried already.
+  if (parts.empty() || (parts.size() == 1 && parts[0].size() > 0.9 * static_cast<double>(points.size()))) return;
+  ++out.split_clusters;
+  for (const Cluster& part : parts) {
+    const PointCloud part_points = cluster_points(points, part);
+    if (bounding_box(part_points.points).diagonal() > options_.max_cluster_size_factor * largest_diameter_m_) continue;
+    std::optional<Detection> det = recognize_cluster(part_points, frame, part_verify, out);
+    if (!det) continue;
+    det->from_split_cluster = true;
+    recognize_rest(points, std::move(*det), frame, out, depth);
+    return;
+  }
+}
+
+void Recognizer::recognize_rest(const PointCloud& points, Detection detection, const Frame& frame, Recognition& out,
+                                int depth) const {
+  // Explain the object's points away and start again on what is left: a smaller object touching it
+  // (less of the cluster than verification lets go unexplained), or, in a split cluster, the other
+  // objects whole (a mug's concave inside is not one convex part, but it is one cluster).
+  const bool go_on = options_.split_touching && depth < options_.max_split_depth;
+  std::vector<Cluster> rest_clusters;
+  if (go_on) {
+    const auto t = Clock::now();
+    const std::vector<char> explained = explained_points(detection, points);
+    std::vector<std::uint32_t> rest;
+    for (std::uint32_t i = 0; i < points.size(); ++i) {
+      if (!explained[i]) rest.push_back(i);
+    }
+    rest_clusters = euclidean_clusters(points, rest, options_.segment.clusters);
+    out.times.segment_ms += ms_since(t);
+  }
+  out.detections.push_back(std::move(detection));
+  for (const Cluster& c : rest_clusters) recognize_region(cluster_points(points, c), frame, out, depth + 1);
+}
+
+std::vector<char> Recognizer::explained_points(const Detection& detection, const PointCloud& points) const {
+  std::vector<char> explained(points.size(), 0);
+  const Transform T_object_camera = detection.T_camera_object.inverse();
+  const KdTree& model = targets_[detection.object_index]->tree;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f& p = points.points[i];
+    const float tolerance = depth_tolerance(p.z(), options_.verify);
+    std::uint32_t index = 0;
+    float d2 = 0;
+    explained[i] = model.nearest((T_object_camera * p.cast<double>()).cast<float>(), index, d2) && d2 <= tolerance * tolerance;
+  }
+  return explained;
+}
+
+std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points, const Frame& frame,
+                                                       const VerifyOptions& verify, Recognition& out) const {
+  DescribeTimes dt;
+  const Description d = describe(points, db_.params.describe, &dt);
+  out.times.normals_ms += dt.normals_ms;
+  out.times.vfh_ms += dt.vfh_ms;
+  out.times.crh_ms += dt.crh_ms;
+  if (d.cloud.size() < 3) return std::nullopt;
+  const auto t_match = Clock::now();
+  const std::vector<Match> matches = nearest_views_per_object(db_, d.vfh, options_.matches);
+  out.times.match_ms += ms_since(t_match);
+  const std::vector<Eigen::Vector3f> icp_source = voxel_downsample(d.cloud, options_.icp_voxel_m).points;
+
+  // The poses one database view gives (one per CRH roll peak), each refined and verified; the
+  // first accepted, or with keep_best the best.
+  const auto try_view = [&](std::size_t rank) {
+    std::optional<Detection> found;
+    const ViewEntry& view = db_.views[matches[rank].view];
+    const DatabaseObject& object = db_.objects[view.object];
+    auto t0 = Clock::now();
+    const std::vector<float> rolls = crh_roll_angles(view.crh, d.crh, options_.roll);
+    out.times.crh_ms += ms_since(t0);
+    for (const float roll : rolls) {
+      const Transform T0 = crh_alignment(view.centroid.cast<double>(), d.centroid.cast<double>(), roll) * view.T_view_object;
+      t0 = Clock::now();
+      const IcpResult icp = icp_point_to_plane(icp_source, *targets_[view.object], T0.inverse(), options_.icp);
+      out.times.icp_ms += ms_since(t0);
+      ++out.hypotheses;
+      if (icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
+      const Transform T = icp.T_target_source.inverse();
+      t0 = Clock::now();
+      const Verification v = verify_pose({&object.mesh, object.model_points, db_.params.voxel_m}, T, frame.depth, frame.K,
+                                         d.cloud.points, verify);
+      out.times.verify_ms += ms_since(t0);
+      if (!v.accepted || (found && found->score >= v.score)) continue;
+      Detection det;
+      det.object_id = object.id;
+      det.object_name = object.name;
+      det.object_index = view.object;
+      det.T_camera_object = T;
+      det.score = v.score;
+      det.icp_fitness = icp.fitness;
+      det.icp_rmse_m = icp.inlier_rmse;
+      det.match_rank = static_cast<int>(rank);
+      det.roll_deg = roll;
+      det.cluster_points = d.cloud.size();
+      det.verification = v;
+      found = det;
+      if (!options_.keep_best) break;
+    }
+    return found;
+  };
+
+  std::optional<Detection> best;
+  std::size_t rank = 0;
+  for (; rank < matches.size() && !(best && !options_.keep_best); ++rank) {
+    std::optional<Detection> det = try_view(rank);
+    if (det && (!best || det->score > best->score)) best = std::move(det);
+  }
+  if (best && !options_.keep_best && options_.challenger_views > 0) {
+    // Another object may explain the cluster better (two boxes of similar size): the other objects
+    // among the next matches get a few of their nearest views each, and the higher score wins.
+    std::vector<std::size_t> tried(db_.objects.size(), 0);
+    const std::size_t end = std::min(matches.size(), rank + options_.matches);
+    for (; rank < end; ++rank) {
+      const std::uint32_t object = db_.views[matches[rank].view].object;
+      if (object == best->object_index || tried[object]++ >= options_.challenger_views) continue;
+      std::optional<Detection> det = try_view(rank);
+      if (det && det->score > best->score) best = std::move(det);
+    }
+  }
+  if (best && options_.try_half_turns) {
+    // The same pose turned about the object's own axes, each refined and verified.
+    const std::uint32_t object_index = best->object_index;
+    const DatabaseObject* object = &db_.objects[object_index];
+    const BoundingBox box = bounding_box(object->model_points);
+    const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
+    Detection chosen = *best;
+    double runner_up = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      // Half a turn about the axis through the box centre, in the object frame.
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
+      const Transform turn = make_transform(R, centre - R * centre);
+      auto t = Clock::now();
+      const IcpResult icp = icp_point_to_plane(icp_source, *targets_[object_index], (best->T_camera_object * turn).inverse(), options_.icp);
+      out.times.icp_ms += ms_since(t);
+      const Transform T = icp.T_target_source.inverse();
+      t = Clock::now();
+      const Verification v = verify_pose({&object->mesh, object->model_points, db_.params.voxel_m}, T, frame.depth,
+                                         frame.K, d.cloud.points, verify);
+      out.times.verify_ms += ms_since(t);
+      ++out.hypotheses;
+      if (!v.accepted) continue;
+      if (v.score > chosen.score) {
+        runner_up = std::max(runner_up, chosen.score);
+        chosen.T_camera_object = T;
+        chosen.score = v.score;
+        chosen.icp_fitness = icp.fitness;
+        chosen.icp_rmse_m = icp.inlier_rmse;
+        chosen.verification = v;
+      } else {
+        runner_up = std::max(runner_up, v.score);
+      }
+    }
+    chosen.runner_up_score = runner_up;
+    best = chosen;
+  }
+  return best;
 }
 
 }  // namespace viewpose

@@ -1,6 +1,8 @@
 // End-to-end recognition on simulated frames with ground truth (issue 5's acceptance), and on the
 // real Xtion frames of ../shared/data/ycbv_real_sample.
 #include <fstream>
+#include <map>
+#include <set>
 #include <numbers>
 
 #include "test_support.hpp"
@@ -113,6 +115,35 @@ TEST(Recognize, TwoObjectFrameGivesBothWithTheRightIds) {
   EXPECT_NE(r.detections[0].object_id, r.detections[1].object_id);
 }
 
+TEST(Recognize, TouchingObjectsAreBothFound) {
+  // The same two objects, the can now standing against the jug's side (3 mm into it, so that the
+  // sensor's points join them): one Euclidean cluster. The jug explains enough of it to pass, and
+  // the can is lost, unless the jug's points are explained away and the rest recognized again.
+  const ViewDatabase& db = jug_and_can_db();
+  SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
+  ds.objects = {{1, "jug", make_jug()}, {2, "can", make_can()}};
+  const Transform& jug_pose = ds.scenes[0].images[0].objects[0].T_camera_object;
+  const BoundingBox jug_box = bounding_box(make_jug());
+  const double lift = static_cast<double>(jug_box.min.z() - bounding_box(make_can()).min.z());
+  const double beside = static_cast<double>(jug_box.max.x()) + 0.033 - 0.003;
+  const Transform can_pose = jug_pose * make_transform(Eigen::Matrix3d::Identity(), {beside, 0.0, lift});
+  const SimulatedFrame f = simulate_image(ds, SimImage{{{0, jug_pose}, {1, can_pose}}}, SensorModel::kinect_v1(), 9);
+  const Frame frame = frame_from_depth(f.depth, K);
+  RecognizerOptions no_split;
+  no_split.split_touching = false;
+  EXPECT_LE(Recognizer(db, no_split).recognize(frame).detections.size(), 1u);
+  const Recognition r = Recognizer(db).recognize(frame);
+  ASSERT_EQ(r.detections.size(), 2u);
+  EXPECT_TRUE(r.detections[0].from_split_cluster || r.detections[1].from_split_cluster);
+  for (const Detection& d : r.detections) {
+    const int truth = d.object_id == 1 ? 0 : 1;
+    const TriangleMesh mesh = d.object_id == 1 ? make_jug() : make_can();
+    EXPECT_LT(add_s_error(d.T_camera_object, f.gt[static_cast<std::size_t>(truth)].T_camera_object, mesh.vertices),
+              0.1 * mesh_diameter(mesh)) << d.object_name;
+  }
+  EXPECT_NE(r.detections[0].object_id, r.detections[1].object_id);
+}
+
 TEST(Frame, IntrinsicsAreRecoveredFromAnOrganizedCloud) {
   const CameraIntrinsics truth{570.3, 565.1, 321.7, 236.2, 640, 480};
   DepthImage d(640, 480);
@@ -142,49 +173,57 @@ TEST(Metrics, AddAndAddSOnKnownOffsets) {
   EXPECT_NEAR(add_s_error(turned, truth, pts), 0.0, 1e-6);
 }
 
-TEST(RealData, YcbvGelatinBoxIsFoundInBothXtionFramesAndNothingWrong) {
-  // Measured (see the issue notes): with a database of the three matching BOP models the gelatin
-  // box is found in both frames, and no wrong pose is accepted; the mug and the foam brick touch
-  // and merge into one cluster that neither model explains. Issue 5's two of three is not met yet.
+TEST(RealData, YcbvObjectsAreFoundInTheXtionFramesAndNothingWrong) {
+  // Measured: with a database of the three matching BOP models all three are found in both frames
+  // within 5 mm ADD-S. The mug and the foam brick touch and come out of Euclidean clustering as one
+  // cluster; they are found in its convex parts. Asserted just below that: 5 of the 6, and every
+  // detection within ADD-S 10 % of its diameter of a ground truth of its own id.
   VIEWPOSE_REQUIRE_SHARED_DATA();
   const auto dir = test::shared_data() / "ycbv_real_sample";
   const BopDataset ds = open_bop_dataset(dir, "data", {"models_bop_ycbv"});
+  const std::map<int, std::string> ycb_names = {{8, "009_gelatin_box"}, {14, "025_mug"}, {21, "061_foam_brick"}};
   std::vector<ObjectModel> models;
-  for (int id : {8, 14, 21}) {
+  std::map<int, Transform> bop_to_ycb;  // per object id
+  for (const auto& [id, name] : ycb_names) {
     PlyFile ply = read_ply(ds.model_files.at(id));
     for (auto& v : ply.mesh.vertices) v *= 0.001f;
     ply.mesh.normals.clear();
     models.push_back({id, fmt::format("obj_{:06d}", id), std::move(ply.mesh)});
-  }
-  const ViewDatabase db = build_view_database(models, DatabaseParams{});
-  const Recognizer recognizer(db);
-  for (const BopImage& im : ds.images) {
-    const BopFrame bf = load_bop_frame(im);
-    const Recognition r = recognizer.recognize(frame_from_depth(bf.depth, bf.K));
-    const GroundTruthPose& gelatin = im.gt.at(0);
-    ASSERT_EQ(gelatin.obj_id, 8);
     // The ground truth is in the YCB-Video model frame (points.xyz); the BOP mesh is that model
     // moved so that its bounding box is centred (MANIFEST: a few mm), p_ycb = p_bop + c. In the
     // mesh's frame the truth is T_camera_ycb * translation(c).
     std::vector<Eigen::Vector3f> ycb_points;
-    {
-      std::ifstream in(dir / "models/009_gelatin_box/points.xyz");
-      float x, y, z;
-      while (in >> x >> y >> z) ycb_points.emplace_back(x, y, z);
-    }
-    ASSERT_GT(ycb_points.size(), 1000u);
+    std::ifstream in(dir / "models" / name / "points.xyz");
+    float x, y, z;
+    while (in >> x >> y >> z) ycb_points.emplace_back(x, y, z);
+    ASSERT_GT(ycb_points.size(), 1000u) << name;
     const BoundingBox box = bounding_box(ycb_points);
     const Eigen::Vector3d c = (0.5f * (box.min + box.max)).cast<double>();
-    EXPECT_LT(c.norm(), 0.006) << "the MANIFEST's offset is a few mm";
-    const Transform truth = gelatin.T_camera_object * make_transform(Eigen::Matrix3d::Identity(), c);
-    bool found = false;
-    for (const Detection& d : r.detections) {
-      EXPECT_EQ(d.object_id, 8) << "image " << im.im_id << ": a false positive, " << d.object_name;
-      if (d.object_id != 8) continue;
-      found = add_s_error(d.T_camera_object, truth, models[0].mesh.vertices) < 0.1 * db.objects[0].diameter_m;
-    }
-    EXPECT_TRUE(found) << "image " << im.im_id;
+    EXPECT_LT(c.norm(), 0.01) << name << ": the MANIFEST's offset is a few mm";
+    bop_to_ycb[id] = make_transform(Eigen::Matrix3d::Identity(), c);
   }
+  const ViewDatabase db = build_view_database(models, DatabaseParams{});
+  const Recognizer recognizer(db);
+  int found = 0;
+  for (const BopImage& im : ds.images) {
+    const BopFrame bf = load_bop_frame(im);
+    const Recognition r = recognizer.recognize(frame_from_depth(bf.depth, bf.K));
+    ASSERT_EQ(im.gt.size(), 3u);
+    std::set<int> found_here;
+    for (const Detection& d : r.detections) {
+      const auto object = std::find_if(db.objects.begin(), db.objects.end(), [&](const DatabaseObject& o) { return o.id == d.object_id; });
+      ASSERT_NE(object, db.objects.end());
+      double error = 1e9;
+      for (const GroundTruthPose& g : im.gt) {
+        if (g.obj_id == d.object_id) error = add_s_error(d.T_camera_object, g.T_camera_object * bop_to_ycb.at(g.obj_id), object->mesh.vertices);
+      }
+      EXPECT_LT(error, 0.1 * object->diameter_m) << "image " << im.im_id << ": a false positive, " << d.object_name;
+      if (error < 0.1 * object->diameter_m) found_here.insert(d.object_id);
+    }
+    found += static_cast<int>(found_here.size());
+    EXPECT_GE(found_here.size(), 2u) << "image " << im.im_id;
+  }
+  EXPECT_GE(found, 5) << "of 6";
 }
 
 TEST(RealData, AScannedMilkCartonIsFoundInTheKinectSceneWithinThreeMillimetres) {

@@ -1,12 +1,19 @@
 #include <map>
 #include <numbers>
 #include <random>
+#include <set>
+#include <numeric>
+
+#include <fmt/format.h>
 
 #include "test_support.hpp"
 #include "viewpose/core/kdtree.hpp"
 #include "viewpose/describe/normals.hpp"
 #include "viewpose/io/pcd.hpp"
 #include "viewpose/render/rasterizer.hpp"
+#include "viewpose/render/sensor_model.hpp"
+#include "viewpose/render/view_sphere.hpp"
+#include "viewpose/segment/convex_segments.hpp"
 #include "viewpose/render/shapes.hpp"
 #include "viewpose/segment/segmentation.hpp"
 #include "viewpose/segment/voxel_grid.hpp"
@@ -97,6 +104,86 @@ TEST(Clusters, SeparatedBoxesAreSeparateClustersInBothVersions) {
   std::vector<std::uint32_t> both;
   for (std::size_t i = 0; i < pair.size(); ++i) if (pair.points[i].allFinite()) both.push_back(static_cast<std::uint32_t>(i));
   EXPECT_EQ(euclidean_clusters(pair, both).size(), 1u);
+}
+
+// Objects standing on a table (z = 0, not drawn), seen by a noisy Kinect from `eye` (metres, world
+// frame), voxelized at 3 mm as the recognizer does; each point labelled with the object it shows.
+PointCloud objects_seen_from(std::span<const MeshInstance> in_world, const Eigen::Vector3d& eye, std::uint64_t seed) {
+  const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
+  const Transform T_camera_world = look_at(eye, {0, 0, 0.04});
+  std::vector<MeshInstance> instances(in_world.begin(), in_world.end());
+  for (auto& instance : instances) instance.T_camera_object = T_camera_world * instance.T_camera_object;
+  RenderOptions options;
+  options.normals = true;  // the sensor model's dropouts depend on the incidence angle
+  const RenderedFrame frame = render(instances, K, options);
+  const DepthImage depth = simulate_sensor(frame, K, SensorModel::kinect_v1(), seed);
+  PointCloud cloud = depth_to_cloud(depth, K);
+  cloud.labels.resize(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) cloud.labels[i] = static_cast<std::uint32_t>(frame.instance[i] + 1);
+  return voxel_downsample(cloud, 0.003f);
+}
+
+// Of `segment`, how many points carry each label.
+std::map<std::uint32_t, std::size_t> labels_of(const PointCloud& cloud, const Cluster& segment) {
+  std::map<std::uint32_t, std::size_t> count;
+  for (std::uint32_t i : segment) ++count[cloud.labels[i]];
+  return count;
+}
+
+TEST(ConvexSegments, ABrickAgainstAMugSplitsIntoTheTwo) {
+  // As in YCB-Video's frames: a brick stands on the table touching a mug, in front of it, seen from
+  // 70 cm at 40 degrees down. Euclidean clustering cannot part them; their join is a concave crease.
+  const TriangleMesh mug = make_mug(), brick = make_box_mesh({0.05f, 0.075f, 0.05f});
+  const std::vector<MeshInstance> world = {
+      {&mug, Transform::Identity()},
+      {&brick, make_transform(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.041 + 0.025 - 0.004, 0.02, 0.025))}};
+  // Local convexity is not always right where the brick's top ends beside the curved mug: measured,
+  // the mug leaks into the brick's segment in 1 of seeds 1 to 8. Asserted: at least 7 of 8 clean.
+  int clean = 0;
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    const PointCloud cloud = objects_seen_from(world, {0.55, 0.2, 0.45}, seed);
+    std::vector<std::uint32_t> all(cloud.size());
+    std::iota(all.begin(), all.end(), 0u);
+    ASSERT_EQ(euclidean_clusters(cloud, all).size(), 1u) << "the objects should touch";
+    const std::vector<Cluster> segments = convex_segments(cloud);
+    std::map<std::uint32_t, std::size_t> total, largest;
+    for (std::uint32_t label : cloud.labels) ++total[label];
+    ASSERT_EQ(total.size(), 2u);
+    // No segment mixes the two; the brick comes out nearly whole. The mug comes out in pieces (its
+    // outside around the brick, and its inside seen over the near rim behind a step), the largest
+    // measured at 30 % of it.
+    bool pure = true;
+    for (const Cluster& segment : segments) {
+      const auto count = labels_of(cloud, segment);
+      const auto majority = std::max_element(count.begin(), count.end(), [](auto& a, auto& b) { return a.second < b.second; });
+      pure = pure && static_cast<double>(majority->second) > 0.95 * static_cast<double>(segment.size());
+      largest[majority->first] = std::max(largest[majority->first], majority->second);
+    }
+    const bool brick_whole = static_cast<double>(largest[2]) > 0.8 * static_cast<double>(total[2]);
+    const bool mug_found = static_cast<double>(largest[1]) > 0.25 * static_cast<double>(total[1]);  // measured 0.3
+    clean += pure && brick_whole && mug_found;
+  }
+  EXPECT_GE(clean, 7) << "of 8 seeds";
+}
+
+TEST(ConvexSegments, ConvexAndSmoothObjectsStayWhole) {
+  // A box (convex edges), a can and a sphere (smooth), each alone, from several sides: one segment.
+  // Cubes seen edge-on or holding few points (the outline) join nothing: measured 86 to 90 % of
+  // the points in the segment.
+  const TriangleMesh box = make_box_mesh({0.06f, 0.095f, 0.2f}), can = make_can(), ball = make_sphere(0.06, 30);
+  const Transform lift_box = make_transform(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 0.1));
+  const Transform lift_ball = make_transform(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 0.06));
+  const std::vector<MeshInstance> objects = {{&box, lift_box}, {&can, Transform::Identity()}, {&ball, lift_ball}};
+  for (const MeshInstance& object : objects) {
+    for (double azimuth : {0.3, 1.4, 2.5}) {
+      const Eigen::Vector3d eye(0.8 * std::cos(azimuth), 0.8 * std::sin(azimuth), 0.5);
+      const PointCloud cloud = objects_seen_from(std::span(&object, 1), eye, 7);
+      const std::vector<Cluster> segments = convex_segments(cloud);
+      const auto where = fmt::format("object {} azimuth {}", &object - objects.data(), azimuth);
+      ASSERT_EQ(segments.size(), 1u) << where;
+      EXPECT_GT(static_cast<double>(segments[0].size()), 0.8 * static_cast<double>(cloud.size())) << where;
+    }
+  }
 }
 
 TEST(Normals, SphereNormalsAreRadialWithinTwoDegrees) {

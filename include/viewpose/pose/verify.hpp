@@ -35,6 +35,10 @@ struct VerifyOptions {
   /// a global descriptor says little about an object mostly out of sight, and such hypotheses were
   /// the false positives on real clutter (measured: true detections 0.57 to 1.0, clutter 0.09, 0.37).
   double min_visible_fraction = 0.4;
+  /// At most this share of the model's unhidden pixels may have no measurement. Off (1) by default:
+  /// dark and shiny objects return little depth. The recognizer tightens it for parts of split
+  /// clusters, where a small patch is weaker evidence (RecognizerOptions::part_max_unmeasured_fraction).
+  double max_unmeasured_fraction = 1.0;
   std::size_t min_inliers = 150;
 };
 
@@ -46,6 +50,7 @@ struct Verification {
   double cluster_explained = 0;
   double model_support = 0;  ///< share of the model's inlier pixels that the cluster covers
   double visible_fraction = 0;  ///< inliers / every interior model pixel (hidden and unmeasured ones too)
+  double unmeasured_fraction = 0;  ///< unknown / (inliers + conflicts + unknown): model pixels with no depth
   std::size_t inliers = 0, conflicts = 0, occluded = 0, unknown = 0;
 };
 
