@@ -1,5 +1,9 @@
 #include "viewpose/eval/metrics.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include "viewpose/core/kdtree.hpp"
 
 namespace viewpose {
@@ -25,6 +29,29 @@ double add_s_error(const Transform& T_estimate, const Transform& T_truth, std::s
     sum += std::sqrt(static_cast<double>(d2));
   }
   return sum / static_cast<double>(model.size());
+}
+
+double mssd_error(const Transform& T_estimate, const Transform& T_truth, std::span<const Eigen::Vector3f> model,
+                  std::span<const Transform> symmetries) {
+  if (model.empty()) return 0.0;
+  const Transform identity = Transform::Identity();
+  if (symmetries.empty()) symmetries = std::span(&identity, 1);
+  double best = std::numeric_limits<double>::infinity();
+  for (const Transform& S : symmetries) {
+    const Transform T_truth_sym = T_truth * S;
+    double worst = 0;
+    for (const auto& p : model) {
+      worst = std::max(worst, (T_estimate * p.cast<double>() - T_truth_sym * p.cast<double>()).norm());
+      if (worst >= best) break;  // this symmetry cannot do better
+    }
+    best = std::min(best, worst);
+  }
+  return best;
+}
+
+double rotation_error_deg(const Eigen::Matrix3d& R_estimate, const Eigen::Matrix3d& R_truth) {
+  const double c = std::clamp(((R_estimate * R_truth.transpose()).trace() - 1.0) / 2.0, -1.0, 1.0);
+  return std::acos(c) * 180.0 / M_PI;
 }
 
 }  // namespace viewpose

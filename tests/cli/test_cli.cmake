@@ -83,6 +83,13 @@ run(TRUE bop --db "${WORK}/jug.vpdb" --dataset "${WORK}/sim" -o "${WORK}/results
 expect_in("${OUT}" "in 4 images")
 run(TRUE info "${WORK}/results.csv")
 expect_in("${OUT}" "BOP19 results CSV")
+run(TRUE eval --dataset "${WORK}/sim" --results "${WORK}/results.csv" --json "${WORK}/eval.json")
+expect_in("${OUT}" "all                  4    100.0")
+file(READ "${WORK}/eval.json" json)
+expect_in("${json}" "\"recall_add_s\": 1.0")
+file(WRITE "${WORK}/truncated.csv" "scene_id,im_id,obj_id,score,R,t,time\n1,0,1,0.9,1 0 0")
+run(FALSE eval --dataset "${WORK}/sim" --results "${WORK}/truncated.csv")
+expect_in("${ERR}" "truncated.csv")
 
 # A scanned view: a cloud of the object alone becomes a database of its own.
 file(REMOVE "${WORK}/scanned.vpdb")

@@ -11,6 +11,14 @@ namespace viewpose {
 /// ADD: mean distance between the model points moved by the estimate and by the truth.
 double add_error(const Transform& T_estimate, const Transform& T_truth, std::span<const Eigen::Vector3f> model_points);
 
+/// MSSD (BOP 2019): the largest distance between a model point under the estimate and under the
+/// truth, at the best of the model's symmetries (object-frame transforms; include the identity).
+double mssd_error(const Transform& T_estimate, const Transform& T_truth, std::span<const Eigen::Vector3f> model_points,
+                  std::span<const Transform> symmetries);
+
+/// Angle of R_estimate R_truth^T, degrees.
+double rotation_error_deg(const Eigen::Matrix3d& R_estimate, const Eigen::Matrix3d& R_truth);
+
 /// ADD-S: mean distance from each model point under the estimate to the nearest model point under
 /// the truth (for symmetric objects, where ADD would punish an equivalent pose).
 double add_s_error(const Transform& T_estimate, const Transform& T_truth, std::span<const Eigen::Vector3f> model_points);

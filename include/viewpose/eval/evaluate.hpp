@@ -1,0 +1,66 @@
+#pragma once
+// Scoring pose estimates (BOP19 results) against a dataset's ground truth, as the BOP toolkit does
+// for the errors it shares with us: ADD and ADD-S recall at a share of the object's diameter, MSSD
+// recall averaged over thresholds, rotation and translation errors, false positives and time.
+//
+// Pairing. In each image, for each object, the estimates are taken by decreasing score; each is
+// paired with the not yet paired ground-truth instance of its object that is nearest under ADD-S.
+// A ground truth counts as found under a metric when its pair's error is below the threshold. An
+// estimate is a false positive when it has no pair or its pair is not found under ADD-S (the most
+// lenient of the three). Ground truths less visible than min_visib_fract are not targets: they
+// count neither way, nor do estimates that find them.
+#include <map>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "viewpose/core/transform.hpp"
+#include "viewpose/io/bop.hpp"
+#include "viewpose/io/bop_results.hpp"
+
+namespace viewpose {
+
+struct EvalOptions {
+  double correct_fraction = 0.1;  ///< ADD and ADD-S: correct below this share of the diameter
+  std::vector<double> mssd_fractions = {0.05, 0.10, 0.15, 0.20, 0.25, 0.30, 0.35, 0.40, 0.45, 0.50};  ///< BOP's
+  double min_visib_fract = 0.1;   ///< BOP's: less visible ground truths are not targets
+  /// Model points used for the errors: the mesh's vertices, thinned evenly to at most this many
+  /// (the errors change by well under a millimetre; MSSD with 315 symmetry steps stays fast).
+  std::size_t max_model_points = 2000;
+  double symmetry_step = 0.01;    ///< continuous symmetries in steps of at most this share of a turn x pi (BOP's)
+};
+
+/// The object's symmetry transforms from models_info.json (identity first), continuous ones in
+/// steps as the BOP toolkit discretizes them.
+std::vector<Transform> symmetry_transforms(const ModelInfo& info, double step = 0.01);
+
+/// One row of the report: an object, a scene, or everything.
+struct Score {
+  int targets = 0;                   ///< ground truths to find
+  int found_add_s = 0, found_add = 0;
+  double mssd_recall = 0;            ///< mean over the MSSD thresholds of the share found
+  int estimates = 0;
+  int false_positives = 0;
+  /// Of the estimates that are correct under ADD-S: rotation (degrees) and translation (mm) errors.
+  double mean_rotation_deg = 0, median_rotation_deg = 0, mean_translation_mm = 0, median_translation_mm = 0;
+  double recall_add_s() const { return targets ? static_cast<double>(found_add_s) / targets : 0.0; }
+  double recall_add() const { return targets ? static_cast<double>(found_add) / targets : 0.0; }
+};
+
+struct EvalReport {
+  std::map<int, Score> per_object;  ///< by obj_id
+  std::map<int, Score> per_scene;   ///< by scene_id
+  Score total;
+  int images = 0;                   ///< images in the split
+  int images_timed = 0;             ///< images with a time in the results
+  double mean_time_s = 0;           ///< over the timed images
+  int ignored_estimates = 0;        ///< estimates for images or objects the dataset does not have
+};
+
+/// `model_points`: per obj_id, the model's points in metres (object frame). Throws viewpose::Error
+/// when an object with ground truth or estimates has no model or no diameter.
+EvalReport evaluate(const BopDataset& dataset, const std::map<int, std::vector<Eigen::Vector3f>>& model_points,
+                    std::span<const BopResult> results, const EvalOptions& options = {});
+
+}  // namespace viewpose
