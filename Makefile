@@ -6,13 +6,14 @@
 #   make fuzz           build the libFuzzer targets (clang) and run each for FUZZ_SECONDS
 #   make check          all three, as CI runs them
 #   make bench          micro-benchmarks of each stage
+#   make results        the thesis's experiment and the real-data check; writes docs/RESULTS.md
 #   make pcl-fixtures   install PCL, and regenerate tests/fixtures/pcl from PCL's own code
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 FUZZ_SECONDS ?= 60
 BUILD := build
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-sanitize fuzz check bench pcl-fixtures clean
+.PHONY: all deps build demo test test-sanitize fuzz check bench results pcl-fixtures clean
 
 all: build
 
@@ -44,6 +45,11 @@ check: test test-sanitize fuzz
 
 bench: build
 	@./$(BUILD)/viewpose_bench
+
+# The thesis's experiment and the real-data check, end to end: writes docs/RESULTS.md and its plots.
+results: build
+	@scripts/install-deps.sh results
+	@/usr/bin/python3 scripts/make-results.py
 
 pcl-fixtures: build
 	@scripts/install-deps.sh pcl

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages viewpose needs to build, test and fuzz. Idempotent: packages that
 # are already installed are skipped, and apt-get runs only when something is missing.
-# Usage: scripts/install-deps.sh [build|fuzz|pcl]...   (default: build)
+# Usage: scripts/install-deps.sh [build|fuzz|pcl|results]...   (default: build)
 set -euo pipefail
 
 build_pkgs=(build-essential cmake pkg-config
@@ -9,6 +9,7 @@ build_pkgs=(build-essential cmake pkg-config
             libcli11-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev)
 fuzz_pkgs=(clang libclang-rt-dev libomp-dev)  # libFuzzer, sanitizer runtimes and OpenMP for clang
 pcl_pkgs=(libpcl-dev)               # only for the optional side-by-side benchmark
+results_pkgs=(python3 python3-matplotlib)  # make results: the report and its plots
 
 wanted=()
 for group in "${@:-build}"; do
@@ -16,7 +17,8 @@ for group in "${@:-build}"; do
     build) wanted+=("${build_pkgs[@]}") ;;
     fuzz)  wanted+=("${build_pkgs[@]}" "${fuzz_pkgs[@]}") ;;
     pcl)   wanted+=("${pcl_pkgs[@]}") ;;
-    *) echo "install-deps: unknown group '$group' (build, fuzz or pcl)" >&2; exit 2 ;;
+    results) wanted+=("${results_pkgs[@]}") ;;
+    *) echo "install-deps: unknown group '$group' (build, fuzz, pcl or results)" >&2; exit 2 ;;
   esac
 done
 

@@ -80,6 +80,15 @@ void add_eval_command(CLI::App& app, int& exit_code) {
                           {"ignored_estimates", r.ignored_estimates}, {"all", to_json(r.total)}};
       for (const auto& [id, s] : r.per_object) j["per_object"][std::to_string(id)] = to_json(s);
       for (const auto& [id, s] : r.per_scene) j["per_scene"][std::to_string(id)] = to_json(s);
+      j["estimates"] = nlohmann::json::array();
+      for (std::size_t i = 0; i < r.estimates.size(); ++i) {
+        const EstimateOutcome& e = r.estimates[i];
+        j["estimates"].push_back({{"scene_id", results[i].scene_id}, {"im_id", results[i].im_id},
+                                  {"obj_id", results[i].obj_id}, {"score", results[i].score},
+                                  {"in_split", e.in_split}, {"paired", e.paired}, {"target", e.target},
+                                  {"add_s_mm", 1000 * e.add_s_m}, {"add_mm", 1000 * e.add_m}, {"mssd_mm", 1000 * e.mssd_m},
+                                  {"correct_add_s", e.correct_add_s}, {"correct_add", e.correct_add}});
+      }
       write_file_atomic(o->json, j.dump(2) + "\n");
     }
     exit_code = 0;

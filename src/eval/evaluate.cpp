@@ -117,6 +117,7 @@ EvalReport evaluate(const BopDataset& ds, const std::map<int, std::vector<Eigen:
   for (const BopResult& r : results) by_image[{r.scene_id, r.im_id}].push_back(&r);
 
   EvalReport report;
+  report.estimates.resize(results.size());
   std::set<std::pair<int, int>> known_images;
   for (const BopImage& im : ds.images) known_images.insert({im.scene_id, im.im_id});
   for (const BopResult& r : results) {
@@ -171,6 +172,10 @@ EvalReport evaluate(const BopDataset& ds, const std::map<int, std::vector<Eigen:
       }
       const bool target = best && (im.gt_info.size() != im.gt.size() || im.gt_info[*best].visib_fract >= o.min_visib_fract);
       const bool correct = best && best_add_s < o.correct_fraction * object.diameter_m;
+      EstimateOutcome& outcome = report.estimates[static_cast<std::size_t>(e - results.data())];
+      outcome.in_split = true;
+      outcome.paired = best.has_value();
+      outcome.target = target;
       if (target || !correct) {
         for (Tally* t : {&total, &per_object[e->obj_id], &per_scene[im.scene_id]}) {
           ++t->score.estimates;
@@ -186,6 +191,11 @@ EvalReport evaluate(const BopDataset& ds, const std::map<int, std::vector<Eigen:
       err.rotation_deg = rotation_error_deg(e->T_camera_object.linear(), truth.linear());
       err.translation_mm = 1000.0 * (e->T_camera_object.translation() - truth.translation()).norm();
       errors_of_gt[*best] = err;
+      outcome.add_s_m = err.add_s;
+      outcome.add_m = err.add;
+      outcome.mssd_m = err.mssd;
+      outcome.correct_add_s = correct;
+      outcome.correct_add = err.add < o.correct_fraction * object.diameter_m;
     }
     for (std::size_t g = 0; g < im.gt.size(); ++g) {
       if (im.gt_info.size() == im.gt.size() && im.gt_info[g].visib_fract < o.min_visib_fract) continue;

@@ -105,6 +105,12 @@ TEST(Evaluate, RecallFalsePositivesAndErrorsOnKnownEstimates) {
   EXPECT_NEAR(s.mean_translation_mm, 1000 * 0.07 * d / 3, 1e-6);
   EXPECT_NEAR(s.mean_rotation_deg, 60.0, 1e-6);     // 0, 0 and 180 degrees
   EXPECT_EQ(r.per_object.at(7).targets, 4);
+  ASSERT_EQ(r.estimates.size(), results.size());
+  EXPECT_TRUE(r.estimates[0].correct_add && r.estimates[0].correct_add_s);
+  EXPECT_NEAR(r.estimates[1].add_m, 0.07 * d, 1e-9);
+  EXPECT_TRUE(r.estimates[2].correct_add_s && !r.estimates[2].correct_add);
+  EXPECT_FALSE(r.estimates[3].paired);
+  EXPECT_FALSE(r.estimates[4].in_split);
   ASSERT_EQ(r.per_scene.size(), 1u);
 
   // Declared symmetric about z, the half turn is right under MSSD too.

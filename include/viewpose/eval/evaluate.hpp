@@ -48,6 +48,15 @@ struct Score {
   double recall_add() const { return targets ? static_cast<double>(found_add) / targets : 0.0; }
 };
 
+/// What became of one estimate.
+struct EstimateOutcome {
+  bool in_split = false;   ///< its image is in the dataset's split
+  bool paired = false;     ///< it was paired with a ground truth of its object
+  bool target = false;     ///< ...that is a target (visible enough)
+  double add_s_m = -1, add_m = -1, mssd_m = -1;  ///< errors against the pair (-1: none)
+  bool correct_add_s = false, correct_add = false;
+};
+
 struct EvalReport {
   std::map<int, Score> per_object;  ///< by obj_id
   std::map<int, Score> per_scene;   ///< by scene_id
@@ -56,6 +65,7 @@ struct EvalReport {
   int images_timed = 0;             ///< images with a time in the results
   double mean_time_s = 0;           ///< over the timed images
   int ignored_estimates = 0;        ///< estimates for images or objects the dataset does not have
+  std::vector<EstimateOutcome> estimates;  ///< one per result, in the order given
 };
 
 /// `model_points`: per obj_id, the model's points in metres (object frame). Throws viewpose::Error
