@@ -68,23 +68,29 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
         continue;
       }
       const float zo = observed.at(x, y);
+      const bool cluster_here = in_cluster[static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x)];
       if (!std::isfinite(zo)) ++v.unknown;
-      else if (zo < zm - tol) ++v.occluded;
-      else if (zo > zm + tol) ++v.conflicts;
+      else if (zo < zm - tol) {
+        // Something in front hides the model here. If that something is the cluster the model is
+        // meant to be, the pose puts the object behind its own surface (a can sunk into a keyboard
+        // with its lid flush): evidence against, not occlusion.
+        if (cluster_here && o.cluster_cannot_hide_model) ++v.hidden_by_cluster;
+        else ++v.occluded;
+      } else if (zo > zm + tol) ++v.conflicts;
       else {
         ++v.inliers;
-        supported += in_cluster[static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x)];
+        supported += cluster_here;
       }
     }
   }
-  const std::size_t judged = v.inliers + v.conflicts;
+  const std::size_t judged = v.inliers + v.conflicts + v.hidden_by_cluster;
   v.inlier_fraction = judged ? static_cast<double>(v.inliers) / static_cast<double>(judged) : 0.0;
-  const std::size_t all = v.inliers + v.conflicts + v.occluded + v.unknown;
+  const std::size_t all = judged + v.occluded + v.unknown;
   v.visible_fraction = all ? static_cast<double>(v.inliers) / static_cast<double>(all) : 0.0;
-  const std::size_t unhidden = v.inliers + v.conflicts + v.unknown;
+  const std::size_t unhidden = judged + v.unknown;
   v.unmeasured_fraction = unhidden ? static_cast<double>(v.unknown) / static_cast<double>(unhidden) : 0.0;
   v.model_support = v.inliers ? static_cast<double>(supported) / static_cast<double>(v.inliers) : 0.0;
-  v.conflict_fraction = judged ? static_cast<double>(v.conflicts) / static_cast<double>(judged) : 0.0;
+  v.conflict_fraction = judged ? static_cast<double>(v.conflicts + v.hidden_by_cluster) / static_cast<double>(judged) : 0.0;
   // The other way round: how much of the cluster lies on the model's surface (within a pixel).
   std::size_t explained = 0, counted = 0;
   for (const Eigen::Vector3f& p : cluster_points) {

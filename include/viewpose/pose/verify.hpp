@@ -5,7 +5,8 @@
 //   inlier:   the observed surface is where the model says it is
 //   conflict: the observed surface is *behind* the model: the camera sees through where the model
 //             would be (free space), which a correct pose cannot explain
-//   occluded: the observed surface is in front of the model: something hides it; no evidence
+//   occluded: the observed surface is in front of the model: something hides it; no evidence,
+//             unless the something is the cluster being explained (hidden_by_cluster: a conflict)
 //   unknown:  no measurement at that pixel; no evidence
 // and the scene cluster must be explained by the model in turn. These are the cues PCL's GHV meant
 // to weigh (explained scene points, visible model outliers, clutter, occlusion), for one
@@ -39,6 +40,9 @@ struct VerifyOptions {
   /// dark and shiny objects return little depth. The recognizer tightens it for parts of split
   /// clusters, where a small patch is weaker evidence (RecognizerOptions::part_max_unmeasured_fraction).
   double max_unmeasured_fraction = 1.0;
+  /// Model pixels hidden by the scene cluster itself count as conflicts: a pose cannot put the
+  /// object behind the very surface it is to explain. Hidden by anything else is occlusion.
+  bool cluster_cannot_hide_model = true;
   std::size_t min_inliers = 150;
 };
 
@@ -52,6 +56,7 @@ struct Verification {
   double visible_fraction = 0;  ///< inliers / every interior model pixel (hidden and unmeasured ones too)
   double unmeasured_fraction = 0;  ///< unknown / (inliers + conflicts + unknown): model pixels with no depth
   std::size_t inliers = 0, conflicts = 0, occluded = 0, unknown = 0;
+  std::size_t hidden_by_cluster = 0;  ///< model pixels behind the cluster's own surface (conflicts too)
 };
 
 /// Tolerance (m) at depth z: base + factor * Kinect sigma(z).
