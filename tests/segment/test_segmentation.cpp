@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "test_support.hpp"
+#include "viewpose/core/error.hpp"
 #include "viewpose/core/kdtree.hpp"
 #include "viewpose/describe/normals.hpp"
 #include "viewpose/io/pcd.hpp"
@@ -164,6 +165,15 @@ TEST(ConvexSegments, ABrickAgainstAMugSplitsIntoTheTwo) {
     clean += pure && brick_whole && mug_found;
   }
   EXPECT_GE(clean, 7) << "of 8 seeds";
+}
+
+TEST(ConvexSegments, EmptyAndNonFiniteInputGiveNoSegments) {
+  EXPECT_TRUE(convex_segments(PointCloud{}).empty());
+  const PointCloud nans = PointCloud::from_points(std::vector<Eigen::Vector3f>(500, Eigen::Vector3f(NAN, 0, 1)));
+  EXPECT_TRUE(convex_segments(nans).empty());
+  ConvexSegmentOptions bad;
+  bad.cell_m = 0;
+  EXPECT_THROW(convex_segments(nans, bad), Error);
 }
 
 TEST(ConvexSegments, ConvexAndSmoothObjectsStayWhole) {
