@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
 #include <fmt/format.h>
 
 #include "camera_flags.hpp"
@@ -42,6 +43,25 @@ void print_database(const fs::path& path, const ViewDatabase& db) {
     fmt::print("    id {:>4}  {:<24} diameter {:6.1f} mm, {} views, {} points per view on average{}\n", db.objects[o].id,
                db.objects[o].name, db.objects[o].diameter_m * 1000, views, views ? points / views : 0,
                db.objects[o].mesh.triangles.empty() ? " (scanned)" : "");
+    const Symmetries& sym = db.objects[o].symmetries;
+    if (sym.continuous.size() >= 2) {
+      fmt::print("              symmetric: any rotation about its centre (a ball)\n");
+    } else if (!sym.empty()) {
+      std::string text;
+      for (const ContinuousSymmetry& c : sym.continuous) {
+        text += fmt::format("any turn about axis ({:.2f}, {:.2f}, {:.2f})", c.axis.x(), c.axis.y(), c.axis.z());
+      }
+      if (!sym.discrete.empty()) {
+        text += fmt::format("{}{} discrete symmetr{}", text.empty() ? "" : ", plus ", sym.discrete.size(),
+                            sym.discrete.size() == 1 ? "y" : "ies");
+        for (const Transform& S : sym.discrete) {
+          const Eigen::AngleAxisd aa(S.linear());
+          text += fmt::format(" [{:.0f} deg about ({:.2f}, {:.2f}, {:.2f})]", aa.angle() * 180 / M_PI, aa.axis().x(),
+                              aa.axis().y(), aa.axis().z());
+        }
+      }
+      fmt::print("              symmetric: {}; poses are reported in one canonical form\n", text);
+    }
   }
 }
 

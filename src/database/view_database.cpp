@@ -145,6 +145,16 @@ std::vector<std::uint8_t> ViewDatabase::serialize() const {
     }
     w.put_points(o.model_points);
     w.put_points(o.model_normals);
+    w.put(static_cast<std::uint32_t>(o.symmetries.discrete.size()));
+    for (const Transform& S : o.symmetries.discrete)
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) w.put(S(r, c));
+    w.put(static_cast<std::uint32_t>(o.symmetries.continuous.size()));
+    for (const ContinuousSymmetry& c : o.symmetries.continuous)
+      for (int k = 0; k < 3; ++k) {
+        w.put(c.axis[k]);
+        w.put(c.offset_m[k]);
+      }
   }
   w.put(static_cast<std::uint32_t>(views.size()));
   for (const auto& v : views) {
@@ -215,6 +225,30 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
     o.model_points = r.get_points();
     o.model_normals = r.get_points();
     if (o.model_normals.size() != o.model_points.size()) r.fail("an object's model normals do not match its points");
+    const auto n_discrete = r.get<std::uint32_t>();
+    r.need_records(n_discrete, 96);
+    for (std::uint32_t k = 0; k < n_discrete; ++k) {
+      Transform S = Transform::Identity();
+      for (int row = 0; row < 3; ++row)
+        for (int c = 0; c < 4; ++c) S(row, c) = r.get<double>();
+      if (!S.matrix().allFinite() || (S.linear().transpose() * S.linear() - Eigen::Matrix3d::Identity()).norm() > 1e-6) {
+        r.fail("an object's symmetry is not a rigid motion");
+      }
+      o.symmetries.discrete.push_back(S);
+    }
+    const auto n_continuous = r.get<std::uint32_t>();
+    r.need_records(n_continuous, 48);
+    for (std::uint32_t k = 0; k < n_continuous; ++k) {
+      ContinuousSymmetry c;
+      for (int axis = 0; axis < 3; ++axis) {
+        c.axis[axis] = r.get<double>();
+        c.offset_m[axis] = r.get<double>();
+      }
+      if (!c.axis.allFinite() || !c.offset_m.allFinite() || std::abs(c.axis.norm() - 1.0) > 1e-6) {
+        r.fail("an object's symmetry axis is not a unit vector");
+      }
+      o.symmetries.continuous.push_back(c);
+    }
     db.objects.push_back(std::move(o));
   }
   const auto n_views = r.get<std::uint32_t>();
@@ -317,6 +351,7 @@ ViewDatabase build_view_database(std::span<const ObjectModel> objects, const Dat
     object.diameter_m = mesh_diameter(mesh);
     object.mesh.vertices = mesh.vertices;
     object.mesh.triangles = mesh.triangles;
+    object.symmetries = find_symmetries(mesh);
     db.objects.push_back(std::move(object));
     const BoundingBox box = bounding_box(mesh);
     const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();

@@ -219,6 +219,10 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
     chosen.runner_up_score = runner_up;
     best = chosen;
   }
+  if (best && options_.canonical_poses) {
+    // Of the poses the object's symmetries make equivalent, always the same one.
+    best->T_camera_object = canonical_pose(best->T_camera_object, db_.objects[best->object_index].symmetries);
+  }
   return best;
 }
 

@@ -19,6 +19,11 @@ ModelInfo model_info(const TriangleMesh& mesh) {
   info.diameter_m = mesh_diameter(mesh);
   info.min_m = box.min.cast<double>();
   info.size_m = box.size().cast<double>();
+  // The shape's symmetries, as found for the view database: scoring (MSSD) then treats poses that
+  // no depth sensor can tell apart as the same.
+  const Symmetries symmetries = find_symmetries(mesh);
+  info.symmetries_discrete = symmetries.discrete;
+  info.symmetries_continuous = symmetries.continuous;
   return info;
 }
 

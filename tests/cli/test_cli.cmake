@@ -69,6 +69,9 @@ expect_in("${ERR}" "no objects")
 
 # Recognition from the command line, and a whole BOP split.
 run(TRUE db build jug -o "${WORK}/jug.vpdb")
+run(TRUE db build can --views 20 -o "${WORK}/can.vpdb")
+run(TRUE db info "${WORK}/can.vpdb")
+expect_in("${OUT}" "symmetric: any turn about axis (0.00, 0.00, 1.00), plus 1 discrete symmetry")
 run(TRUE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json"
     --json "${WORK}/r.json" --overlay "${WORK}/ov.png" --aligned "${WORK}/al.ply")
 expect_in("${OUT}" "jug (id 1): position")

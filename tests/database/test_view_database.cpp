@@ -74,6 +74,11 @@ TEST(ViewDatabaseTest, SurvivesAWriteReadRoundTripBitForBit) {
   ASSERT_EQ(back.views.size(), db.views.size());
   EXPECT_TRUE(back.views[7].T_view_object.isApprox(db.views[7].T_view_object, 0.0));
   EXPECT_EQ(back.objects[1].name, "can");
+  // The can's symmetries (a free turn about its axis, upside down) are stored; the jug has none.
+  EXPECT_TRUE(back.objects[0].symmetries.empty());
+  ASSERT_EQ(back.objects[1].symmetries.continuous.size(), 1u);
+  ASSERT_EQ(back.objects[1].symmetries.discrete.size(), 1u);
+  EXPECT_TRUE(back.objects[1].symmetries.discrete[0].isApprox(db.objects[1].symmetries.discrete[0], 0.0));
   EXPECT_EQ(back.params.subdivisions, 0);
   EXPECT_EQ(back.params.describe.vfh.pcl_compatible, db.params.describe.vfh.pcl_compatible);
 }
@@ -88,8 +93,8 @@ TEST(ViewDatabaseTest, DamagedOrForeignFilesAreRefusedWithAClearError) {
   expect_error([&] { ViewDatabase::deserialize({}, "empty.vpdb"); }, "empty.vpdb: not a viewpose view database");
   expect_error([&] { ViewDatabase::deserialize(test::to_bytes("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\n"), "a.vpdb"); },
                "not a viewpose view database");
-  expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { b[8] = 2; }), "v2.vpdb"); },
-               "database format version 2, this viewpose reads version 1; rebuild it");
+  expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { b[8] = 1; }), "v1.vpdb"); },
+               "database format version 1, this viewpose reads version 2; rebuild it");
   expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { std::swap(b[12], b[15]); }), "be.vpdb"); }, "byte order");
   expect_error([&] { ViewDatabase::deserialize(std::span(good.data(), good.size() / 2), "half.vpdb"); }, "truncated or padded");
   expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { b[b.size() / 2] ^= 0x40; }), "flip.vpdb"); },

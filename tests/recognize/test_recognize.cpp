@@ -175,6 +175,32 @@ TEST(Recognize, TouchingObjectsAreBothFound) {
   EXPECT_NE(r.detections[0].object_id, r.detections[1].object_id);
 }
 
+TEST(Recognize, ACanTurnedAboutItsAxisGivesTheSamePose) {
+  // A can looks the same turned about its axis: the pose reported is the canonical one, the same
+  // for every turn (issue 10), and still right under ADD-S.
+  const ViewDatabase& db = jug_and_can_db();
+  ASSERT_EQ(db.objects[1].symmetries.continuous.size(), 1u);
+  SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
+  ds.objects = {{1, "jug", make_jug()}, {2, "can", make_can()}};
+  const Transform& jug_pose = ds.scenes[0].images[0].objects[0].T_camera_object;
+  const double lift = static_cast<double>(bounding_box(make_jug()).min.z() - bounding_box(make_can()).min.z());
+  const Transform can_pose = jug_pose * make_transform(Eigen::Matrix3d::Identity(), {0.0, 0.0, lift});
+  std::vector<Transform> reported;
+  for (double deg : {0.0, 50.0, 130.0}) {
+    const Transform turned = can_pose * make_transform(Eigen::AngleAxisd(deg * std::numbers::pi / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix(), Eigen::Vector3d::Zero());
+    const SimulatedFrame f = simulate_image(ds, SimImage{{{1, turned}}}, SensorModel::kinect_v1(), 5);
+    const Recognition r = Recognizer(db).recognize(frame_from_depth(f.depth, K));
+    ASSERT_EQ(r.detections.size(), 1u) << deg;
+    EXPECT_EQ(r.detections[0].object_id, 2);
+    EXPECT_LT(add_s_error(r.detections[0].T_camera_object, turned, make_can().vertices), 0.1 * db.objects[1].diameter_m);
+    reported.push_back(r.detections[0].T_camera_object);
+  }
+  for (const Transform& T : reported) {
+    EXPECT_LT(rotation_difference_deg(T.linear(), reported[0].linear()), 3.0);
+    EXPECT_LT((T.translation() - reported[0].translation()).norm(), 0.005);
+  }
+}
+
 TEST(Frame, IntrinsicsAreRecoveredFromAnOrganizedCloud) {
   const CameraIntrinsics truth{570.3, 565.1, 321.7, 236.2, 640, 480};
   DepthImage d(640, 480);

@@ -13,6 +13,7 @@
 #include "viewpose/core/depth_image.hpp"
 #include "viewpose/core/mesh.hpp"
 #include "viewpose/core/object_model.hpp"
+#include "viewpose/core/symmetry.hpp"
 #include "viewpose/core/transform.hpp"
 #include "viewpose/describe/describe.hpp"
 
@@ -25,6 +26,7 @@ struct DatabaseObject {
   TriangleMesh mesh;  ///< metres, object frame: rendered at a hypothesis to verify it
   std::vector<Eigen::Vector3f> model_points;   ///< the surface the views saw, object frame, voxel grid
   std::vector<Eigen::Vector3f> model_normals;  ///< outward, one per model point: ICP's target
+  Symmetries symmetries;  ///< of the mesh's shape (find_symmetries); none for scanned objects
 };
 
 struct ViewEntry {
@@ -48,7 +50,7 @@ struct DatabaseParams {
 };
 
 struct ViewDatabase {
-  static constexpr std::uint32_t kFormatVersion = 1;
+  static constexpr std::uint32_t kFormatVersion = 2;  // 2: objects carry their symmetries
   DatabaseParams params;
   std::vector<DatabaseObject> objects;
   std::vector<ViewEntry> views;

@@ -21,6 +21,7 @@
 
 #include "viewpose/core/camera.hpp"
 #include "viewpose/core/depth_image.hpp"
+#include "viewpose/core/symmetry.hpp"
 #include "viewpose/core/transform.hpp"
 
 namespace viewpose {
@@ -41,11 +42,6 @@ struct GroundTruthInfo {
   int px_count_all = 0, px_count_valid = 0, px_count_visib = 0;
   std::array<int, 4> bbox_obj{-1, -1, -1, -1};    ///< x, y, width, height in pixels
   std::array<int, 4> bbox_visib{-1, -1, -1, -1};
-};
-
-struct ContinuousSymmetry {
-  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
-  Eigen::Vector3d offset_m = Eigen::Vector3d::Zero();
 };
 
 struct ModelInfo {

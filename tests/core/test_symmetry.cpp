@@ -1,0 +1,92 @@
+// Symmetries found on shapes whose symmetries are known by construction, and canonical poses.
+#include <numbers>
+
+#include <Eigen/Geometry>
+
+#include "test_support.hpp"
+#include "viewpose/core/symmetry.hpp"
+#include "viewpose/render/shapes.hpp"
+
+namespace viewpose {
+namespace {
+
+Transform turn(const Eigen::Vector3d& axis, double deg, const Eigen::Vector3d& t = Eigen::Vector3d::Zero()) {
+  return make_transform(Eigen::AngleAxisd(deg * std::numbers::pi / 180.0, axis.normalized()).toRotationMatrix(), t);
+}
+
+// Largest distance a symmetry moves a mesh vertex off the surface.
+double worst_displacement(const TriangleMesh& mesh, const Transform& S) {
+  double worst = 0;
+  for (std::size_t i = 0; i < mesh.vertices.size(); i += std::max<std::size_t>(1, mesh.vertices.size() / 200))
+    worst = std::max(worst, distance_to_surface(mesh, S * mesh.vertices[i].cast<double>()));
+  return worst;
+}
+
+TEST(Symmetry, ABoxWithThreeDifferentSidesHasItsThreeHalfTurns) {
+  const TriangleMesh box = make_box_mesh({0.06f, 0.095f, 0.2f});
+  const Symmetries s = find_symmetries(box);
+  EXPECT_TRUE(s.continuous.empty());
+  ASSERT_EQ(s.discrete.size(), 3u);
+  for (const Transform& S : s.discrete) {
+    EXPECT_NEAR(Eigen::AngleAxisd(S.linear()).angle(), std::numbers::pi, 1e-3);
+    EXPECT_LT(worst_displacement(box, S), 1e-4);
+  }
+}
+
+TEST(Symmetry, ASquareSectionAddsQuarterTurns) {
+  const TriangleMesh box = make_box_mesh({0.05f, 0.05f, 0.2f});
+  const Symmetries s = find_symmetries(box);
+  EXPECT_TRUE(s.continuous.empty());
+  EXPECT_EQ(s.discrete.size(), 7u);  // the dihedral group of the square, less the identity
+}
+
+TEST(Symmetry, ACanTurnsFreelyAboutItsAxisAndFlipsEndForEnd) {
+  const TriangleMesh can = make_can();
+  const Symmetries s = find_symmetries(can);
+  ASSERT_EQ(s.continuous.size(), 1u);
+  EXPECT_GT(std::abs(s.continuous[0].axis.dot(Eigen::Vector3d::UnitZ())), 0.999);
+  // The axis passes through the can's middle: x = y = 0.
+  const Eigen::Vector3d o = s.continuous[0].offset_m;
+  const Eigen::Vector3d off_axis = o - o.dot(s.continuous[0].axis) * s.continuous[0].axis;
+  EXPECT_LT(off_axis.norm(), 0.001);
+  ASSERT_EQ(s.discrete.size(), 1u);  // upside down
+  EXPECT_LT(worst_displacement(can, s.discrete[0]), 0.002);
+}
+
+TEST(Symmetry, AJugAndAMugWithHandlesHaveNone) {
+  EXPECT_TRUE(find_symmetries(make_jug()).empty());
+  EXPECT_TRUE(find_symmetries(make_mug()).empty());
+}
+
+TEST(Symmetry, ASphereTurnsEveryWay) {
+  const Symmetries s = find_symmetries(make_sphere(0.05, 30));
+  EXPECT_EQ(s.continuous.size(), 3u);
+}
+
+TEST(Symmetry, EquivalentPosesGiveTheSameCanonicalPose) {
+  const Transform T = turn({1, 2, 0.5}, 70, {0.1, -0.05, 0.9});
+  // Box: each of its half turns.
+  const TriangleMesh box = make_box_mesh({0.06f, 0.095f, 0.2f});
+  const Symmetries box_s = find_symmetries(box);
+  const Transform c = canonical_pose(T, box_s);
+  for (const Transform& S : box_s.discrete) {
+    const Transform other = canonical_pose(T * S, box_s);
+    EXPECT_LT((other.matrix() - c.matrix()).norm(), 1e-6);
+  }
+  // Can: any turn about its axis, and upside down.
+  const Symmetries can_s = find_symmetries(make_can());
+  const Transform cc = canonical_pose(T, can_s);
+  for (const Transform& S : symmetry_transforms(can_s, 37.0)) {
+    const Transform other = canonical_pose(T * S, can_s);
+    EXPECT_LT((other.linear() - cc.linear()).norm(), 1e-3);
+    EXPECT_LT((other.translation() - cc.translation()).norm(), 1e-4);
+  }
+  // The canonical pose is one of the equivalent ones: it moves the can's surface onto itself.
+  const TriangleMesh can = make_can();
+  EXPECT_LT(worst_displacement(can, T.inverse() * cc), 0.002);
+  // Without symmetries nothing changes.
+  EXPECT_LT((canonical_pose(T, Symmetries{}).matrix() - T.matrix()).norm(), 1e-12);
+}
+
+}  // namespace
+}  // namespace viewpose
