@@ -17,6 +17,7 @@ nlohmann::json to_json(const Score& s) {
   return {{"targets", s.targets},
           {"recall_add_s", s.recall_add_s()},
           {"recall_add", s.recall_add()},
+          {"recall_add_or_s", s.recall_add_or_s()},
           {"recall_mssd", s.mssd_recall},
           {"found_add_s", s.found_add_s},
           {"found_add", s.found_add},
@@ -27,8 +28,8 @@ nlohmann::json to_json(const Score& s) {
 }
 
 void print_row(const std::string& name, const Score& s) {
-  fmt::print("{:<14} {:>7} {:>8.1f} {:>8.1f} {:>8.1f} {:>6} {:>9.2f} {:>9.2f} {:>9.1f} {:>9.1f}\n", name, s.targets,
-             100 * s.recall_add_s(), 100 * s.recall_add(), 100 * s.mssd_recall, s.false_positives, s.mean_rotation_deg,
+  fmt::print("{:<14} {:>7} {:>8.1f} {:>8.1f} {:>8.1f} {:>8.1f} {:>6} {:>9.2f} {:>9.2f} {:>9.1f} {:>9.1f}\n", name, s.targets,
+             100 * s.recall_add_s(), 100 * s.recall_add(), 100 * s.recall_add_or_s(), 100 * s.mssd_recall, s.false_positives, s.mean_rotation_deg,
              s.median_rotation_deg, s.mean_translation_mm, s.median_translation_mm);
 }
 
@@ -60,7 +61,7 @@ void add_eval_command(CLI::App& app, int& exit_code) {
     const EvalReport r = evaluate(ds, points, results, options);
 
     fmt::print("{} images, {} estimates; recall in %, errors of the estimates correct under ADD-S\n", r.images, results.size());
-    fmt::print("{:<14} {:>7} {:>8} {:>8} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9}\n", "", "targets", "ADD-S", "ADD", "MSSD",
+    fmt::print("{:<14} {:>7} {:>8} {:>8} {:>8} {:>8} {:>6} {:>9} {:>9} {:>9} {:>9}\n", "", "targets", "ADD-S", "ADD", "ADD(-S)", "MSSD",
                "FP", "rot mean", "rot med", "mm mean", "mm med");
     for (const auto& [id, s] : r.per_object) print_row(fmt::format("object {}", id), s);
     if (r.per_scene.size() > 1) {

@@ -66,7 +66,7 @@ struct Tally {
   std::vector<int> mssd_found;  // per threshold
   std::vector<double> rotations, translations;
 
-  void add_target(const Errors* e, double diameter, const EvalOptions& o) {
+  void add_target(const Errors* e, double diameter, bool symmetric, const EvalOptions& o) {
     ++score.targets;
     mssd_found.resize(o.mssd_fractions.size(), 0);
     if (!e) return;
@@ -77,6 +77,7 @@ struct Tally {
       translations.push_back(e->translation_mm);
     }
     if (e->add < limit) ++score.found_add;
+    if ((symmetric ? e->add_s : e->add) < limit) ++score.found_add_or_s;
     for (std::size_t k = 0; k < o.mssd_fractions.size(); ++k) mssd_found[k] += e->mssd < o.mssd_fractions[k] * diameter;
   }
 
@@ -201,7 +202,8 @@ EvalReport evaluate(const BopDataset& ds, const std::map<int, std::vector<Eigen:
       if (im.gt_info.size() == im.gt.size() && im.gt_info[g].visib_fract < o.min_visib_fract) continue;
       const int id = im.gt[g].obj_id;
       const Errors* e = errors_of_gt[g] ? &*errors_of_gt[g] : nullptr;
-      for (Tally* t : {&total, &per_object[id], &per_scene[im.scene_id]}) t->add_target(e, objects.at(id).diameter_m, o);
+      const ObjectData& object = objects.at(id);
+      for (Tally* t : {&total, &per_object[id], &per_scene[im.scene_id]}) t->add_target(e, object.diameter_m, object.symmetries.size() > 1, o);
     }
   }
   report.ignored_estimates = static_cast<int>(results.size() - matched_results);

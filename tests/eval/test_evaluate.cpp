@@ -113,9 +113,14 @@ TEST(Evaluate, RecallFalsePositivesAndErrorsOnKnownEstimates) {
   EXPECT_FALSE(r.estimates[4].in_split);
   ASSERT_EQ(r.per_scene.size(), 1u);
 
-  // Declared symmetric about z, the half turn is right under MSSD too.
+  EXPECT_EQ(s.found_add_or_s, 2);  // no symmetries declared: ADD
+
+  // Declared symmetric about z, the half turn is right under MSSD and ADD(-S) too.
   ds.models[7].symmetries_discrete = {turn(Eigen::Vector3d::UnitZ(), 180)};
-  EXPECT_NEAR(evaluate(ds, models, results).total.mssd_recall, 29.0 / 40.0, 1e-12);
+  const EvalReport symmetric = evaluate(ds, models, results);
+  EXPECT_NEAR(symmetric.total.mssd_recall, 29.0 / 40.0, 1e-12);
+  EXPECT_EQ(symmetric.total.found_add_or_s, 3);
+  EXPECT_EQ(symmetric.total.found_add, 2);
 }
 
 TEST(Evaluate, InvisibleGroundTruthIsNoTargetAndMissingModelsAreAnError) {

@@ -39,6 +39,9 @@ std::vector<Transform> symmetry_transforms(const ModelInfo& info, double step = 
 struct Score {
   int targets = 0;                   ///< ground truths to find
   int found_add_s = 0, found_add = 0;
+  /// ADD(-S), the LINEMOD convention: ADD for objects without symmetries, ADD-S for those with them
+  /// (models_info.json), so a symmetric object's equivalent poses are not counted wrong.
+  int found_add_or_s = 0;
   double mssd_recall = 0;            ///< mean over the MSSD thresholds of the share found
   int estimates = 0;
   int false_positives = 0;
@@ -46,6 +49,7 @@ struct Score {
   double mean_rotation_deg = 0, median_rotation_deg = 0, mean_translation_mm = 0, median_translation_mm = 0;
   double recall_add_s() const { return targets ? static_cast<double>(found_add_s) / targets : 0.0; }
   double recall_add() const { return targets ? static_cast<double>(found_add) / targets : 0.0; }
+  double recall_add_or_s() const { return targets ? static_cast<double>(found_add_or_s) / targets : 0.0; }
 };
 
 /// What became of one estimate.
