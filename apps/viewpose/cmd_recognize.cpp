@@ -86,9 +86,10 @@ void print_recognition(const Recognition& r) {
   for (const Detection& d : r.detections) {
     const Eigen::Vector3d t = d.T_camera_object.translation();
     const Eigen::Vector3d ypr = yaw_pitch_roll_deg(d.T_camera_object.linear());
+    // The margin: how far the pose stood above its best half-turned rival (none passing: the score).
     fmt::print("{} (id {}): position ({:.3f}, {:.3f}, {:.3f}) m, yaw/pitch/roll ({:.1f}, {:.1f}, {:.1f}) deg, score {:.2f}, "
-               "match rank {}\n", d.object_name, d.object_id, t.x(), t.y(), t.z(), ypr.x(), ypr.y(), ypr.z(), d.score,
-               d.match_rank);
+               "margin {:.2f}, match rank {}\n", d.object_name, d.object_id, t.x(), t.y(), t.z(), ypr.x(), ypr.y(), ypr.z(),
+               d.score, d.score - d.runner_up_score, d.match_rank);
   }
   const StageTimes& s = r.times;
   fmt::print("time {:.1f} ms: downsample {:.1f}, segment {:.1f}, normals {:.1f}, vfh {:.1f}, match {:.1f}, crh {:.1f}, "
