@@ -202,6 +202,18 @@ def real_data(viewpose, shared, work, log):
     return out
 
 
+def finish_plot(fig, ax, xlabel, ylabel, legend_at, title, out_png):
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_ylim(0, 102)
+    ax.grid(alpha=0.3)
+    ax.legend(loc=legend_at, fontsize=8)
+    ax.set_title(title)
+    fig.tight_layout()
+    fig.savefig(out_png)
+    plt.close(fig)
+
+
 def plot_success(ev, out_png):
     fig, ax = plt.subplots(figsize=(6, 4), dpi=100)
     scenes = sorted(int(s) for s in ev["per_scene"])
@@ -211,31 +223,17 @@ def plot_success(ev, out_png):
                               ("recall_mssd", "viewpose, MSSD recall (BOP)", "^-")):
         ax.plot(d, [100 * ev["per_scene"][str(s)][key] for s in scenes], style, label=label)
     ax.plot(list(THESIS_SUCCESS), list(THESIS_SUCCESS.values()), "kx--", label="thesis (real Xtion, PCL)")
-    ax.set_xlabel("distance from the camera (m)")
-    ax.set_ylabel("success (%)")
-    ax.set_ylim(0, 102)
-    ax.grid(alpha=0.3)
-    ax.legend(loc="lower left", fontsize=8)
-    ax.set_title("Seed experiment: success against distance")
-    fig.tight_layout()
-    fig.savefig(out_png)
-    plt.close(fig)
+    finish_plot(fig, ax, "distance from the camera (m)", "success (%)", "lower left",
+                "Seed experiment: success against distance", out_png)
 
 
 def plot_ranks(curves, out_png):
     fig, ax = plt.subplots(figsize=(6, 4), dpi=100)
     for scene, curve in sorted(curves.items()):
         ax.plot(range(1, len(curve) + 1), [100 * c for c in curve], "o-", ms=3, label=f"{DISTANCES[scene - 1]:.2f} m")
-    ax.set_xlabel("database matches tried")
-    ax.set_ylabel("poses found (%)")
-    ax.set_ylim(0, 102)
     ax.set_xticks(range(1, 21))
-    ax.grid(alpha=0.3)
-    ax.legend(loc="lower right", fontsize=8)
-    ax.set_title("Share of poses found within the first N matches (thesis figure 18)")
-    fig.tight_layout()
-    fig.savefig(out_png)
-    plt.close(fig)
+    finish_plot(fig, ax, "database matches tried", "poses found (%)", "lower right",
+                "Share of poses found within the first N matches (thesis figure 18)", out_png)
 
 
 def write_page(path, m, ev, details, db_seconds, curves, margin, real, orientations, log, corrected, clut):

@@ -175,11 +175,11 @@ Symmetries find_symmetries(const TriangleMesh& mesh, const SymmetryOptions& o) {
   return out;
 }
 
-std::vector<Transform> symmetry_transforms(const Symmetries& s, double step_deg) {
+std::vector<Transform> symmetry_transforms(const Symmetries& s, int continuous_steps) {
   std::vector<Transform> discrete = {Transform::Identity()};
   discrete.insert(discrete.end(), s.discrete.begin(), s.discrete.end());
   if (s.continuous.empty()) return discrete;
-  const int steps = std::max(1, static_cast<int>(std::ceil(360.0 / step_deg)));
+  const int steps = std::max(1, continuous_steps);
   std::vector<Transform> out;
   for (const ContinuousSymmetry& c : s.continuous) {
     for (int i = 0; i < steps; ++i) {

@@ -16,21 +16,9 @@
 namespace viewpose {
 
 std::vector<Transform> symmetry_transforms(const ModelInfo& info, double step) {
-  std::vector<Transform> discrete = {Transform::Identity()};
-  for (const Transform& S : info.symmetries_discrete) discrete.push_back(S);
-  if (info.symmetries_continuous.empty()) return discrete;
-  // As the BOP toolkit: ceil(pi / step) rotations about each continuous axis, each combined with
-  // every discrete symmetry.
-  const int steps = static_cast<int>(std::ceil(M_PI / step));
-  std::vector<Transform> out;
-  for (const ContinuousSymmetry& c : info.symmetries_continuous) {
-    for (int i = 0; i < steps; ++i) {
-      const Eigen::Matrix3d R = Eigen::AngleAxisd(2.0 * M_PI * i / steps, c.axis.normalized()).toRotationMatrix();
-      const Transform C = make_transform(R, c.offset_m - R * c.offset_m);
-      for (const Transform& D : discrete) out.push_back(C * D);
-    }
-  }
-  return out;
+  // As the BOP toolkit: ceil(pi / step) turns about each continuous axis.
+  return symmetry_transforms(Symmetries{info.symmetries_discrete, info.symmetries_continuous},
+                             static_cast<int>(std::ceil(M_PI / step)));
 }
 
 namespace {

@@ -125,16 +125,29 @@ TEST(Recognize, FrameWithNoKnownObjectGivesNoDetection) {
   EXPECT_TRUE(r.detections.empty()) << r.detections.size() << " detections, first " << r.detections[0].object_name;
 }
 
+// The jug 1 m away on the table (the seed experiment's first frame), and a dataset whose objects
+// are the jug (index 0) and a can (index 1). `can_at(x)`: the can standing on the same table, x
+// metres along the jug's own x axis from the jug's centre (the jug stands upright, z up).
+struct JugAndCan {
+  SimDataset ds;
+  Transform jug_pose;
+  double can_lift = 0;  // the can's origin above the jug's, so that both stand on the table
+  Transform can_at(double x) const { return jug_pose * make_transform(Eigen::Matrix3d::Identity(), {x, 0.0, can_lift}); }
+};
+
+JugAndCan jug_and_can_scene() {
+  JugAndCan s;
+  s.ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
+  s.ds.objects = {{1, "jug", make_jug()}, {2, "can", make_can()}};
+  s.jug_pose = s.ds.scenes[0].images[0].objects[0].T_camera_object;
+  s.can_lift = static_cast<double>(bounding_box(make_jug()).min.z() - bounding_box(make_can()).min.z());
+  return s;
+}
+
 TEST(Recognize, TwoObjectFrameGivesBothWithTheRightIds) {
   const ViewDatabase& db = jug_and_can_db();
-  SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
-  ds.objects = {{1, "jug", make_jug()}, {2, "can", make_can()}};
-  const Transform& jug_pose = ds.scenes[0].images[0].objects[0].T_camera_object;
-  // The can stands on the table 25 cm to the jug's side: its base 15.35 cm below the jug's centre
-  // plane... expressed by moving along the jug's own axes (upright, z up).
-  const double lift = static_cast<double>(bounding_box(make_jug()).min.z() - bounding_box(make_can()).min.z());
-  const Transform can_pose = jug_pose * make_transform(Eigen::Matrix3d::Identity(), {0.25, 0.0, lift});
-  const SimulatedFrame f = simulate_image(ds, SimImage{{{0, jug_pose}, {1, can_pose}}}, SensorModel::kinect_v1(), 9);
+  const JugAndCan scene = jug_and_can_scene();  // the can 25 cm to the jug's side
+  const SimulatedFrame f = simulate_image(scene.ds, SimImage{{{0, scene.jug_pose}, {1, scene.can_at(0.25)}}}, SensorModel::kinect_v1(), 9);
   const Recognition r = Recognizer(db).recognize(frame_from_depth(f.depth, K));
   ASSERT_EQ(r.detections.size(), 2u);
   for (const Detection& d : r.detections) {
@@ -151,14 +164,9 @@ TEST(Recognize, TouchingObjectsAreBothFound) {
   // sensor's points join them): one Euclidean cluster. The jug explains enough of it to pass, and
   // the can is lost, unless the jug's points are explained away and the rest recognized again.
   const ViewDatabase& db = jug_and_can_db();
-  SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
-  ds.objects = {{1, "jug", make_jug()}, {2, "can", make_can()}};
-  const Transform& jug_pose = ds.scenes[0].images[0].objects[0].T_camera_object;
-  const BoundingBox jug_box = bounding_box(make_jug());
-  const double lift = static_cast<double>(jug_box.min.z() - bounding_box(make_can()).min.z());
-  const double beside = static_cast<double>(jug_box.max.x()) + 0.033 - 0.003;
-  const Transform can_pose = jug_pose * make_transform(Eigen::Matrix3d::Identity(), {beside, 0.0, lift});
-  const SimulatedFrame f = simulate_image(ds, SimImage{{{0, jug_pose}, {1, can_pose}}}, SensorModel::kinect_v1(), 9);
+  const JugAndCan scene = jug_and_can_scene();
+  const double beside = static_cast<double>(bounding_box(make_jug()).max.x()) + 0.033 - 0.003;
+  const SimulatedFrame f = simulate_image(scene.ds, SimImage{{{0, scene.jug_pose}, {1, scene.can_at(beside)}}}, SensorModel::kinect_v1(), 9);
   const Frame frame = frame_from_depth(f.depth, K);
   RecognizerOptions no_split;
   no_split.split_touching = false;
@@ -180,15 +188,12 @@ TEST(Recognize, ACanTurnedAboutItsAxisGivesTheSamePose) {
   // for every turn (issue 10), and still right under ADD-S.
   const ViewDatabase& db = jug_and_can_db();
   ASSERT_EQ(db.objects[1].symmetries.continuous.size(), 1u);
-  SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
-  ds.objects = {{1, "jug", make_jug()}, {2, "can", make_can()}};
-  const Transform& jug_pose = ds.scenes[0].images[0].objects[0].T_camera_object;
-  const double lift = static_cast<double>(bounding_box(make_jug()).min.z() - bounding_box(make_can()).min.z());
-  const Transform can_pose = jug_pose * make_transform(Eigen::Matrix3d::Identity(), {0.0, 0.0, lift});
+  const JugAndCan scene = jug_and_can_scene();
+  const Transform can_pose = scene.can_at(0.0);  // where the jug would stand
   std::vector<Transform> reported;
   for (double deg : {0.0, 50.0, 130.0}) {
     const Transform turned = can_pose * make_transform(Eigen::AngleAxisd(deg * std::numbers::pi / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix(), Eigen::Vector3d::Zero());
-    const SimulatedFrame f = simulate_image(ds, SimImage{{{1, turned}}}, SensorModel::kinect_v1(), 5);
+    const SimulatedFrame f = simulate_image(scene.ds, SimImage{{{1, turned}}}, SensorModel::kinect_v1(), 5);
     const Recognition r = Recognizer(db).recognize(frame_from_depth(f.depth, K));
     ASSERT_EQ(r.detections.size(), 1u) << deg;
     EXPECT_EQ(r.detections[0].object_id, 2);

@@ -39,9 +39,9 @@ struct SymmetryOptions {
 /// An empty result for an object with a distinguishing part (a jug's handle).
 Symmetries find_symmetries(const TriangleMesh& mesh, const SymmetryOptions& options = {});
 
-/// Every distinct transform the symmetries make, the identity first; continuous ones in steps of
-/// `step_deg` (combined with each discrete one).
-std::vector<Transform> symmetry_transforms(const Symmetries& symmetries, double step_deg = 1.0);
+/// Every transform the symmetries make, the identity first; each continuous one as
+/// `continuous_steps` equal turns, each combined with every discrete one.
+std::vector<Transform> symmetry_transforms(const Symmetries& symmetries, int continuous_steps = 360);
 
 /// Among the poses T_camera_object * S that the symmetries make equivalent, the one whose rotation is
 /// nearest the camera's own axes (the identity): the same answer for every equivalent input.
