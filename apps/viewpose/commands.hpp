@@ -14,6 +14,7 @@ void add_demo_command(CLI::App& app, int& exit_code);
 void add_simulate_command(CLI::App& app, int& exit_code);
 void add_db_command(CLI::App& app, int& exit_code);
 void add_eval_command(CLI::App& app, int& exit_code);
+void add_bench_command(CLI::App& app, int& exit_code);
 void add_recognize_command(CLI::App& app, int& exit_code);
 void add_bop_command(CLI::App& app, int& exit_code);
 

@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   viewpose::cli::add_recognize_command(app, exit_code);
   viewpose::cli::add_bop_command(app, exit_code);
   viewpose::cli::add_eval_command(app, exit_code);
+  viewpose::cli::add_bench_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

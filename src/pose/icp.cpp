@@ -10,11 +10,20 @@ namespace viewpose {
 IcpTarget::IcpTarget(std::vector<Eigen::Vector3f> p, std::vector<Eigen::Vector3f> n)
     : points(std::move(p)), normals(std::move(n)), tree(points) {}
 
-IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> source, const IcpTarget& target,
+IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const IcpTarget& target,
                              const Transform& T_initial, const IcpOptions& o) {
   IcpResult result;
   result.T_target_source = T_initial;
-  if (source.empty() || target.points.empty()) return result;
+  if (all_source.empty() || target.points.empty()) return result;
+  // An even subset: every k-th point, k chosen so that at most max_source_points remain.
+  std::vector<Eigen::Vector3f> subset;
+  std::span<const Eigen::Vector3f> source = all_source;
+  if (o.max_source_points > 0 && all_source.size() > o.max_source_points) {
+    const double step = static_cast<double>(all_source.size()) / static_cast<double>(o.max_source_points);
+    subset.reserve(o.max_source_points);
+    for (std::size_t i = 0; i < o.max_source_points; ++i) subset.push_back(all_source[static_cast<std::size_t>(static_cast<double>(i) * step)]);
+    source = subset;
+  }
   for (std::size_t stage = 0; stage < o.max_correspondence_m.size(); ++stage) {
     const float max_d = o.max_correspondence_m[stage];
     const float max_d2 = max_d * max_d;

@@ -1,12 +1,12 @@
 #include "viewpose/segment/clusters.hpp"
 
 #include <algorithm>
-#include <deque>
+#include <cmath>
+#include <cstdint>
 
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
-#include "viewpose/core/kdtree.hpp"
 
 namespace viewpose {
 
@@ -23,30 +23,93 @@ void keep_by_size(std::vector<Cluster>& clusters, const ClusterOptions& o) {
 std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const std::uint32_t> indices,
                                         const ClusterOptions& o) {
   if (!(o.tolerance_m > 0)) throw Error(fmt::format("clusters: tolerance {} must be positive", o.tolerance_m));
-  std::vector<Eigen::Vector3f> pts;
-  pts.reserve(indices.size());
-  for (std::uint32_t i : indices) pts.push_back(cloud.points[i]);
-  const KdTree tree(pts);
-  std::vector<char> done(pts.size(), 0);
-  std::vector<Cluster> clusters;
-  std::vector<std::uint32_t> neighbours, queue;
-  for (std::size_t seed = 0; seed < pts.size(); ++seed) {
-    if (done[seed] || !pts[seed].allFinite()) continue;
-    queue.assign(1, static_cast<std::uint32_t>(seed));
-    done[seed] = 1;
-    for (std::size_t q = 0; q < queue.size(); ++q) {
-      tree.radius_search(pts[queue[q]], o.tolerance_m, neighbours);
-      for (std::uint32_t n : neighbours) {
-        if (!done[n]) {
-          done[n] = 1;
-          queue.push_back(n);
-        }
+  // Points binned into cubes of side tolerance / sqrt(3): any two points in one cube are within the
+  // tolerance, so each cube is joined whole, and only cubes up to two apart need their points
+  // compared, once, until the two are joined. Exactly the transitive closure of "closer than the
+  // tolerance", without a radius search per point.
+  const float cell = o.tolerance_m / std::sqrt(3.0f), inv = 1.0f / cell, t2 = o.tolerance_m * o.tolerance_m;
+  constexpr std::int64_t kOffset = 1 << 20, kMask = (1 << 21) - 1;
+  const auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
+    return (static_cast<std::uint64_t>(x) << 42) | (static_cast<std::uint64_t>(y) << 21) | static_cast<std::uint64_t>(z);
+  };
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;  // cube, position in `indices`
+  keyed.reserve(indices.size());
+  for (std::size_t k = 0; k < indices.size(); ++k) {
+    const Eigen::Vector3f& p = cloud.points[indices[k]];
+    if (!p.allFinite()) continue;
+    std::int64_t c[3];
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) {
+      c[a] = static_cast<std::int64_t>(std::floor(p[a] * inv)) + kOffset;
+      inside = inside && c[a] >= 2 && c[a] <= kMask - 2;
+    }
+    if (inside) keyed.emplace_back(key(c[0], c[1], c[2]), static_cast<std::uint32_t>(k));
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint64_t> cubes;
+  std::vector<std::size_t> first;  // into keyed
+  for (std::size_t k = 0; k < keyed.size(); ++k) {
+    if (k == 0 || keyed[k].first != keyed[k - 1].first) {
+      cubes.push_back(keyed[k].first);
+      first.push_back(k);
+    }
+  }
+  first.push_back(keyed.size());
+  std::vector<std::uint32_t> parent(cubes.size());
+  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  const auto find = [&](std::uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  const auto linked = [&](std::size_t a, std::size_t b) {
+    for (std::size_t i = first[a]; i < first[a + 1]; ++i)
+      for (std::size_t j = first[b]; j < first[b + 1]; ++j)
+        if ((cloud.points[indices[keyed[i].second]] - cloud.points[indices[keyed[j].second]]).squaredNorm() <= t2) return true;
+    return false;
+  };
+  // The later columns (x, y) within two cubes, and the same column: keys only grow from cube to cube,
+  // so each column's position in `cubes` is a pointer that only moves forward.
+  std::vector<std::pair<int, int>> columns;
+  for (int dx = 0; dx <= 2; ++dx)
+    for (int dy = -2; dy <= 2; ++dy)
+      if (dx > 0 || dy >= 0) columns.emplace_back(dx, dy);
+  std::vector<std::size_t> pointer(columns.size(), 0);
+  const auto gap = [](std::int64_t d) { return std::max<std::int64_t>(std::abs(d) - 1, 0); };
+  for (std::size_t a = 0; a < cubes.size(); ++a) {
+    const std::int64_t x = static_cast<std::int64_t>(cubes[a] >> 42), y = static_cast<std::int64_t>((cubes[a] >> 21) & kMask),
+                       z = static_cast<std::int64_t>(cubes[a] & kMask);
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      const auto [dx, dy] = columns[c];
+      const bool same_column = dx == 0 && dy == 0;
+      const std::uint64_t lo = key(x + dx, y + dy, same_column ? z + 1 : z - 2), hi = key(x + dx, y + dy, z + 2);
+      std::size_t& b = pointer[c];
+      while (b < cubes.size() && cubes[b] < lo) ++b;
+      for (std::size_t j = b; j < cubes.size() && cubes[j] <= hi; ++j) {
+        const std::int64_t dz = static_cast<std::int64_t>(cubes[j] & kMask) - z;
+        // Cubes whose nearest corners are farther apart than the tolerance cannot be linked.
+        if (gap(dx) * gap(dx) + gap(dy) * gap(dy) + gap(dz) * gap(dz) > 3) continue;
+        const std::uint32_t ra = find(static_cast<std::uint32_t>(a)), rb = find(static_cast<std::uint32_t>(j));
+        if (ra != rb && linked(a, j)) parent[std::max(ra, rb)] = std::min(ra, rb);
       }
     }
-    Cluster c;
-    c.reserve(queue.size());
-    for (std::uint32_t k : queue) c.push_back(indices[k]);
-    clusters.push_back(std::move(c));
+  }
+  // Clusters in the order of their first point, as a region growing from each unvisited point would give.
+  std::vector<std::uint32_t> smallest(cubes.size(), UINT32_MAX);
+  for (std::size_t a = 0; a < cubes.size(); ++a) {
+    const std::uint32_t r = find(static_cast<std::uint32_t>(a));
+    for (std::size_t i = first[a]; i < first[a + 1]; ++i) smallest[r] = std::min(smallest[r], keyed[i].second);
+  }
+  std::vector<std::uint32_t> roots;
+  for (std::uint32_t a = 0; a < cubes.size(); ++a) {
+    if (find(a) == a) roots.push_back(a);
+  }
+  std::sort(roots.begin(), roots.end(), [&](std::uint32_t l, std::uint32_t r) { return smallest[l] < smallest[r]; });
+  std::vector<std::uint32_t> slot(cubes.size(), 0);
+  for (std::uint32_t k = 0; k < roots.size(); ++k) slot[roots[k]] = k;
+  std::vector<Cluster> clusters(roots.size());
+  for (std::size_t a = 0; a < cubes.size(); ++a) {
+    Cluster& c = clusters[slot[find(static_cast<std::uint32_t>(a))]];
+    for (std::size_t i = first[a]; i < first[a + 1]; ++i) c.push_back(indices[keyed[i].second]);
   }
   keep_by_size(clusters, o);
   return clusters;

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <random>
-#include <unordered_map>
 
 #include <Eigen/Eigenvalues>
 
@@ -22,8 +21,17 @@ std::vector<std::uint32_t> inliers_of(std::span<const Eigen::Vector3f> points, s
   return in;
 }
 
-// Least-squares plane and in-plane spread of a set of points.
-Eigen::Vector4f refit(std::span<const Eigen::Vector3f> points, std::span<const std::uint32_t> in, float& extent) {
+// The spread of values from their 2nd to their 98th percentile (the extremes ignored).
+float spread_2_to_98(std::vector<double>& s) {
+  const auto lo = s.begin() + static_cast<std::ptrdiff_t>(s.size() * 2 / 100),
+             hi = s.begin() + static_cast<std::ptrdiff_t>(s.size() * 98 / 100);
+  std::nth_element(s.begin(), hi, s.end());
+  std::nth_element(s.begin(), lo, hi);
+  return static_cast<float>(*hi - *lo);
+}
+
+// Least-squares plane of a set of points.
+Eigen::Vector4f refit(std::span<const Eigen::Vector3f> points, std::span<const std::uint32_t> in) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (std::uint32_t i : in) mean += points[i].cast<double>();
   mean /= static_cast<double>(in.size());
@@ -36,15 +44,6 @@ Eigen::Vector4f refit(std::span<const Eigen::Vector3f> points, std::span<const s
   eig.computeDirect(cov);
   Eigen::Vector3d n = eig.eigenvectors().col(0);
   if (n.dot(-mean) < 0) n = -n;  // face the sensor at the origin
-  // Spread along the two in-plane axes, ignoring the 2 % extremes on either side; the smaller one.
-  extent = std::numeric_limits<float>::infinity();
-  for (int axis : {1, 2}) {
-    std::vector<double> s;
-    s.reserve(in.size());
-    for (std::uint32_t i : in) s.push_back((points[i].cast<double>() - mean).dot(eig.eigenvectors().col(axis)));
-    std::sort(s.begin(), s.end());
-    extent = std::min(extent, static_cast<float>(s[s.size() * 98 / 100] - s[s.size() * 2 / 100]));
-  }
   return {static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()), static_cast<float>(-n.dot(mean))};
 }
 
@@ -57,7 +56,7 @@ Plane fit_plane(std::span<const Eigen::Vector3f> points, std::span<const std::ui
   std::uniform_int_distribution<std::size_t> pick(0, indices.size() - 1);
   // Hypotheses are scored on a fixed random subsample (a few thousand points estimate the inlier
   // share to within a percent); only the winner is counted on every point.
-  constexpr std::size_t kScoreSample = 4000;
+  constexpr std::size_t kScoreSample = 2000;
   std::vector<std::uint32_t> sample;
   if (indices.size() <= kScoreSample) {
     sample.assign(indices.begin(), indices.end());
@@ -85,7 +84,7 @@ Plane fit_plane(std::span<const Eigen::Vector3f> points, std::span<const std::ui
   }
   if (best_count < 3) return best;
   best.inliers = inliers_of(points, indices, best.coefficients, o.distance_threshold_m);
-  best.coefficients = refit(points, best.inliers, best.extent_m);
+  best.coefficients = refit(points, best.inliers);
   best.inliers = inliers_of(points, indices, best.coefficients, o.distance_threshold_m);
   return best;
 }
@@ -98,77 +97,137 @@ std::vector<std::uint32_t> minus(const std::vector<std::uint32_t>& a, const std:
   return out;
 }
 
-// The inliers of the largest connected patch of a plane: the inliers binned into square cells
-// of the plane's own 2-D coordinates, cells joined to their 8 neighbours. Linear time.
-std::vector<std::uint32_t> largest_patch(std::span<const Eigen::Vector3f> points, const Plane& plane, float cell) {
+struct Patch {
+  std::vector<std::uint32_t> points;  ///< ascending
+  std::size_t cells = 0;
+  float cell_m = 0;
+  float extent_m = 0;  ///< smaller in-plane spread of the cells (2nd to 98th percentile)
+};
+
+// The largest connected patch of a plane's inliers: the inliers binned into square cells of the
+// plane's own 2-D coordinates (a dense grid over their extent), cells joined to their 8 neighbours.
+Patch largest_patch(std::span<const Eigen::Vector3f> points, const Plane& plane, float cell) {
+  Patch best;
+  if (plane.inliers.empty()) return best;
   const Eigen::Vector3f n = plane.coefficients.head<3>();
   const Eigen::Vector3f a = (std::abs(n.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY()).cross(n).normalized();
   const Eigen::Vector3f b = n.cross(a);
-  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
-  const auto key = [](std::int64_t x, std::int64_t y) {
-    return (static_cast<std::uint64_t>(x + (1 << 30)) << 32) | static_cast<std::uint64_t>(y + (1 << 30));
-  };
+  Eigen::Vector2f lo = Eigen::Vector2f::Constant(std::numeric_limits<float>::max()), hi = -lo;
   for (std::uint32_t i : plane.inliers) {
-    cells[key(static_cast<std::int64_t>(std::floor(a.dot(points[i]) / cell)),
-              static_cast<std::int64_t>(std::floor(b.dot(points[i]) / cell)))].push_back(i);
+    const Eigen::Vector2f q(a.dot(points[i]), b.dot(points[i]));
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
   }
-  std::unordered_map<std::uint64_t, char> seen;
-  std::vector<std::uint32_t> best, current;
-  std::vector<std::uint64_t> queue;
-  for (const auto& [start, unused] : cells) {
-    if (seen[start]) continue;
-    seen[start] = 1;
+  // At most 4 M cells: a plane wider than 20 m (nothing a depth camera sees) gets coarser cells.
+  constexpr double kMaxCells = 4e6;
+  const Eigen::Vector2f span = hi - lo;
+  cell = std::max(cell, static_cast<float>(std::sqrt(static_cast<double>(span.x()) * span.y() / kMaxCells)));
+  const int W = static_cast<int>(span.x() / cell) + 1, H = static_cast<int>(span.y() / cell) + 1;
+  std::vector<std::uint32_t> cell_of(plane.inliers.size());
+  std::vector<std::int32_t> label(static_cast<std::size_t>(W) * static_cast<std::size_t>(H), -1);  // -1 empty, -2 occupied
+  for (std::size_t k = 0; k < plane.inliers.size(); ++k) {
+    const Eigen::Vector3f& p = points[plane.inliers[k]];
+    const int x = std::min(W - 1, static_cast<int>((a.dot(p) - lo.x()) / cell)), y = std::min(H - 1, static_cast<int>((b.dot(p) - lo.y()) / cell));
+    cell_of[k] = static_cast<std::uint32_t>(y * W + x);
+    label[cell_of[k]] = -2;
+  }
+  std::vector<std::size_t> size;
+  std::vector<std::uint32_t> queue, largest_cells;
+  for (std::uint32_t start = 0; start < label.size(); ++start) {
+    if (label[start] != -2) continue;
+    const auto id = static_cast<std::int32_t>(size.size());
+    label[start] = id;
     queue.assign(1, start);
-    current.clear();
     for (std::size_t q = 0; q < queue.size(); ++q) {
-      const std::uint64_t c = queue[q];
-      const auto& members = cells[c];
-      current.insert(current.end(), members.begin(), members.end());
-      const std::int64_t x = static_cast<std::int64_t>(c >> 32) - (1 << 30), y = static_cast<std::int64_t>(c & 0xffffffffu) - (1 << 30);
-      for (std::int64_t dx = -1; dx <= 1; ++dx)
-        for (std::int64_t dy = -1; dy <= 1; ++dy) {
-          const std::uint64_t k = key(x + dx, y + dy);
-          if (cells.count(k) && !seen[k]) {
-            seen[k] = 1;
-            queue.push_back(k);
+      const int x = static_cast<int>(queue[q] % static_cast<std::uint32_t>(W)), y = static_cast<int>(queue[q] / static_cast<std::uint32_t>(W));
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int xx = x + dx, yy = y + dy;
+          if (xx < 0 || yy < 0 || xx >= W || yy >= H) continue;
+          const auto j = static_cast<std::uint32_t>(yy * W + xx);
+          if (label[j] == -2) {
+            label[j] = id;
+            queue.push_back(j);
           }
         }
     }
-    if (current.size() > best.size()) best.swap(current);
+    size.push_back(queue.size());
+    if (queue.size() > largest_cells.size()) largest_cells.swap(queue);
   }
-  std::sort(best.begin(), best.end());
-  return best;
+  const auto largest = static_cast<std::int32_t>(std::max_element(size.begin(), size.end()) - size.begin());
+  best.cells = size[static_cast<std::size_t>(largest)];
+  best.cell_m = cell;
+  // The spread is measured on the cells, not the points: a sensor samples near parts of a table
+  // more densely than far ones, and the extent must not depend on that.
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  std::vector<Eigen::Vector2d> centres;
+  for (std::uint32_t c : largest_cells) {
+    centres.emplace_back((c % static_cast<std::uint32_t>(W) + 0.5) * cell, (c / static_cast<std::uint32_t>(W) + 0.5) * cell);
+    mean += centres.back();
+  }
+  mean /= static_cast<double>(centres.size());
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const Eigen::Vector2d& c : centres) cov.noalias() += (c - mean) * (c - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  best.extent_m = std::numeric_limits<float>::infinity();
+  for (int axis = 0; axis < 2; ++axis) {
+    std::vector<double> s;
+    s.reserve(centres.size());
+    for (const Eigen::Vector2d& c : centres) s.push_back((c - mean).dot(eig.eigenvectors().col(axis)));
+    best.extent_m = std::min(best.extent_m, spread_2_to_98(s));
+  }
+  for (std::size_t k = 0; k < plane.inliers.size(); ++k) {
+    if (label[cell_of[k]] == largest) best.points.push_back(plane.inliers[k]);
+  }
+  return best;  // ascending, as the inliers are
 }
 
 }  // namespace
 
 PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o) {
   PlaneRemoval out;
+  std::vector<std::uint32_t> finite;
+  finite.reserve(cloud.size());
   for (std::size_t i = 0; i < cloud.size(); ++i) {
-    if (cloud.points[i].allFinite()) out.remaining.push_back(static_cast<std::uint32_t>(i));
+    if (cloud.points[i].allFinite()) finite.push_back(static_cast<std::uint32_t>(i));
   }
-  // Planes are searched for among `pool`; a plane that is not large is left in the cloud but
-  // taken out of the pool, so that a smaller wall behind it can still be found.
-  std::vector<std::uint32_t> pool = out.remaining;
+  // Planes are searched for among `pool`, an even sample of the cloud; a plane that is not large
+  // is left in the cloud but taken out of the pool, so that a smaller wall behind it can still be found.
+  std::vector<std::uint32_t> pool;
+  if (o.max_sample_points > 0 && finite.size() > o.max_sample_points) {
+    const double step = static_cast<double>(finite.size()) / static_cast<double>(o.max_sample_points);
+    for (std::size_t k = 0; k < o.max_sample_points; ++k) pool.push_back(finite[static_cast<std::size_t>(static_cast<double>(k) * step)]);
+  } else {
+    pool = finite;
+  }
   PlaneOptions round = o;
   // Cells of the inlier band's width: neighbouring cells link points up to about 2.8 cells apart.
   const float patch_cell = o.distance_threshold_m;
-  for (int attempt = 0; attempt < 2 * o.max_planes && static_cast<int>(out.removed.size()) < o.max_planes &&
-                        pool.size() >= o.min_inliers;
+  for (int attempt = 0; attempt < 2 * o.max_planes && static_cast<int>(out.removed.size()) < o.max_planes && pool.size() >= 3;
        ++attempt) {
     round.seed = o.seed + static_cast<std::uint64_t>(attempt);
     Plane plane = fit_plane(cloud.points, pool, round);
-    if (plane.inliers.size() < o.min_inliers) break;
+    // A patch of min_area covers that many cells, each holding a point at least: the best plane
+    // left has fewer inliers, so no plane left is large.
+    if (static_cast<double>(plane.inliers.size()) < o.min_area_m2 / (patch_cell * patch_cell) || plane.inliers.size() < 3) break;
     // Large means one connected patch spans min_extent in both directions: a table or a wall does;
     // coplanar faces of boxes (apart, or in a row) and object faces do not.
-    const std::vector<std::uint32_t> patch = largest_patch(cloud.points, plane, patch_cell);
-    float patch_extent = 0;
-    refit(cloud.points, patch, patch_extent);
+    const Patch patch = largest_patch(cloud.points, plane, patch_cell);
+    const float patch_extent = patch.extent_m;
     pool = minus(pool, plane.inliers);
-    if (patch.size() < o.min_inliers || patch_extent < o.min_extent_m) continue;
+    plane.area_m2 = static_cast<float>(patch.cells) * patch.cell_m * patch.cell_m;
+    if (plane.area_m2 < o.min_area_m2 || patch_extent < o.min_extent_m) continue;
     plane.extent_m = patch_extent;
-    out.remaining = minus(out.remaining, plane.inliers);
     out.removed.push_back(std::move(plane));
+  }
+  // Every point, not just the sample, is tested against the planes found.
+  std::vector<char> on_plane(cloud.size(), 0);
+  for (Plane& plane : out.removed) {
+    plane.inliers = inliers_of(cloud.points, finite, plane.coefficients, o.distance_threshold_m);
+    for (std::uint32_t i : plane.inliers) on_plane[i] = 1;
+  }
+  for (std::uint32_t i : finite) {
+    if (!on_plane[i]) out.remaining.push_back(i);
   }
   return out;
 }

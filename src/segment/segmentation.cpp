@@ -8,15 +8,19 @@ namespace viewpose {
 
 Segmentation segment_scene(const PointCloud& frame, const SegmentOptions& options, SegmentTimes* times) {
   Segmentation s;
+  // Planes first, on the frame as measured (they are searched for in a sample of it), so that only
+  // what stands on them is voxelized: a table is most of a frame.
   auto t = Clock::now();
-  s.points = voxel_downsample(frame, options.voxel_m);
-  if (times) times->downsample_ms += ms_since(t);
-  t = Clock::now();
-  PlaneRemoval planes = remove_large_planes(s.points, options.planes);
+  PlaneRemoval planes = remove_large_planes(frame, options.planes);
   s.planes = std::move(planes.removed);
   if (times) times->planes_ms += ms_since(t);
   t = Clock::now();
-  s.clusters = euclidean_clusters(s.points, planes.remaining, options.clusters);
+  s.points = voxel_downsample(cluster_points(frame, planes.remaining), options.voxel_m);
+  if (times) times->downsample_ms += ms_since(t);
+  t = Clock::now();
+  std::vector<std::uint32_t> all(s.points.size());
+  for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+  s.clusters = euclidean_clusters(s.points, all, options.clusters);
   if (times) times->clusters_ms += ms_since(t);
   return s;
 }

@@ -19,6 +19,9 @@ struct IcpOptions {
   double convergence_translation_m = 1e-5;  ///< a stage ends when a step moves less than this...
   double convergence_rotation_rad = 1e-5;   ///< ...and turns less than this
   std::size_t min_correspondences = 12;
+  /// At most this many source points take part, evenly spread over the source (0: all). A few
+  /// hundred points pin six parameters down as well as thousands; the time is linear in them.
+  std::size_t max_source_points = 400;
   /// After the first stage, give up (not converged) when fewer source points than this share found
   /// the target: a wrong hypothesis is dropped early instead of being refined to the end.
   double min_fitness_after_first_stage = 0.5;

@@ -1,9 +1,11 @@
 #pragma once
 // Removal of large planes (tables, walls, floors) by RANSAC, as the thesis does before clustering,
-// keeping objects that merely have flat faces: a plane is removed only when it has enough inliers
-// *and* its largest connected patch spans, in both directions, more than any object would. (The thesis removed every
-// plane above a point count, which needs the object's size and, on shelves of boxes, removes the
-// boxes' coplanar tops.)
+// keeping objects that merely have flat faces: a plane is removed only when its largest connected
+// patch covers enough area *and* spans, in both directions, more than any object would. (The
+// thesis removed every plane above a point count, which needs the object's size and, on shelves of
+// boxes, removes the boxes' coplanar tops.) Planes are searched for in an even sample of the
+// cloud, so that the time does not grow with the sensor's resolution; every point is then tested
+// against the planes found.
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -17,16 +19,23 @@ namespace viewpose {
 struct PlaneOptions {
   float distance_threshold_m = 0.01f;  ///< inlier band (thesis: about 1 cm)
   int max_iterations = 500;            ///< RANSAC samples at most (stops earlier at 99 % confidence)
-  std::size_t min_inliers = 1000;      ///< smaller planes stay
+  /// Planes whose largest connected patch covers less than this stay (0.01 m2: 1000 points of a
+  /// 3 mm voxel grid). Measured in cells of the inlier band's width, so it does not depend on how
+  /// densely the cloud samples the plane.
+  float min_area_m2 = 0.01f;
   float min_extent_m = 0.30f;          ///< planes narrower than this in either direction (object faces) stay
+  /// Planes are searched for among at most this many points, evenly spread over the cloud: enough
+  /// to sample a table at 3 m at under a cell apart.
+  std::size_t max_sample_points = 40000;
   int max_planes = 5;
   std::uint64_t seed = 1;
 };
 
 struct Plane {
   Eigen::Vector4f coefficients = Eigen::Vector4f::Zero();  ///< unit normal n and d, n.p + d = 0; n faces the origin
-  std::vector<std::uint32_t> inliers;
+  std::vector<std::uint32_t> inliers;  ///< every point of the cloud within the band, ascending
   float extent_m = 0;  ///< smaller in-plane spread (2nd to 98th percentile) of the largest connected patch
+  float area_m2 = 0;   ///< area of the largest connected patch
 };
 
 /// The best plane among the points `indices` of `points` (RANSAC, then a least-squares refit on

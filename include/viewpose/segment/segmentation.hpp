@@ -1,6 +1,8 @@
 #pragma once
-// The thesis's preprocessing of a frame: voxel grid, removal of large planes, Euclidean clusters.
-// Each cluster is a candidate object, handed to describe().
+// The thesis's preprocessing of a frame: removal of large planes, voxel grid, Euclidean clusters.
+// Each cluster is a candidate object, handed to describe(). (The thesis voxelized first; removing
+// the planes first, from a sample of the frame, leaves a tenth of the points to voxelize, and the
+// same voxels.)
 #include <vector>
 
 #include "viewpose/core/point_cloud.hpp"
@@ -16,8 +18,8 @@ struct SegmentOptions {
 };
 
 struct Segmentation {
-  PointCloud points;              ///< the voxelized frame
-  std::vector<Plane> planes;      ///< removed planes (indices into points)
+  PointCloud points;              ///< what is left of the frame once the planes are removed, voxelized
+  std::vector<Plane> planes;      ///< removed planes (their inliers index the input frame)
   std::vector<Cluster> clusters;  ///< candidate objects (indices into points), largest first
 };
 

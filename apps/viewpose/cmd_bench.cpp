@@ -1,0 +1,201 @@
+// `viewpose bench`: the whole pipeline over many frames, timed per stage. By default on a generated
+// seed experiment (the built-in jug at 0.75-1.50 m, its database built in the same run); with
+// --dataset on a BOP split against a given database. Prints median, 90th and 95th percentile and
+// the frames per second; with ground truth also how many poses were right, so that speed is never
+// bought with accuracy unseen.
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include "progress.hpp"
+#include "viewpose/core/error.hpp"
+#include "viewpose/core/stopwatch.hpp"
+#include "viewpose/core/threads.hpp"
+#include "viewpose/eval/metrics.hpp"
+#include "viewpose/io/bop.hpp"
+#include "viewpose/io/file.hpp"
+#include "viewpose/recognize/recognizer.hpp"
+#include "viewpose/render/shapes.hpp"
+#include "viewpose/simulate/scene.hpp"
+
+namespace viewpose::cli {
+
+namespace {
+
+struct BenchFrame {
+  Frame frame;
+  std::vector<GroundTruthPose> gt;
+};
+
+// The setting: one object at 0.75-1.50 m, turned to evenly spaced yaws at each distance.
+std::vector<BenchFrame> seed_frames(const ObjectModel& object, int count) {
+  SeedExperimentOptions setup;
+  setup.distances_m = {0.75, 1.00, 1.25, 1.50};
+  setup.orientations = (count + 3) / 4;
+  const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
+  const SimDataset scenes = make_seed_experiment(object, K, setup, 7);
+  std::vector<BenchFrame> frames;
+  // Interleave the distances, so that a shorter run still covers all of them.
+  for (std::size_t k = 0; k < static_cast<std::size_t>(setup.orientations); ++k) {
+    for (const SimScene& scene : scenes.scenes) {
+      if (frames.size() >= static_cast<std::size_t>(count)) break;
+      const SimulatedFrame f = simulate_image(scenes, scene.images[k], SensorModel::kinect_v1(), 100 * scene.scene_id + k);
+      frames.push_back({frame_from_depth(f.depth, K), f.gt});
+    }
+  }
+  return frames;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const double pos = q * static_cast<double>(v.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(pos));
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (pos - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
+double peak_rss_mib() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux reports kilobytes
+}
+
+}  // namespace
+
+void add_bench_command(CLI::App& app, int& exit_code) {
+  struct Options {
+    std::string dataset, split = "test", models_dir = "models", db, json;
+    int frames = 100, threads = 0;
+    bool no_split = false;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand(
+      "bench", "Time the whole pipeline over many frames: per-stage median and percentiles, frames per second, accuracy");
+  cmd->add_option("--frames", o->frames, "Frames to run (the generated seed experiment, or the first N of the dataset)")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  cmd->add_option("--dataset", o->dataset, "BOP dataset folder (default: a generated seed experiment of the built-in jug)")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--split", o->split, "Split folder")->capture_default_str();
+  cmd->add_option("--models-dir", o->models_dir, "Folder of models_info.json, under the dataset")->capture_default_str();
+  cmd->add_option("--db", o->db, "View database (required with --dataset; default: built from the jug in this run)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--threads", o->threads, "Threads (default: every core)")->check(CLI::Range(1, 256));
+  cmd->add_flag("--no-split", o->no_split, "Do not split clusters in which nothing is found");
+  cmd->add_option("--json", o->json, "Also write the numbers as JSON to this file");
+  cmd->callback([o, &exit_code] {
+    if (o->threads > 0) set_thread_count(o->threads);
+    if (!o->dataset.empty() && o->db.empty()) throw Error("bench: --dataset needs --db");
+    ViewDatabase db;
+    double db_build_ms = 0;
+    std::vector<BenchFrame> frames;
+    std::string source;
+    if (o->dataset.empty()) {
+      const ObjectModel jug{1, "jug", make_jug()};
+      const auto t = Clock::now();
+      db = o->db.empty() ? build_view_database(std::span(&jug, 1), DatabaseParams{}) : ViewDatabase::load(o->db);
+      db_build_ms = o->db.empty() ? ms_since(t) : 0;
+      fmt::print(stderr, "simulating {} frames of the jug at 0.75-1.50 m...\n", o->frames);
+      frames = seed_frames(jug, o->frames);
+      source = "seed experiment (jug, 0.75-1.50 m, simulated Kinect v1)";
+    } else {
+      db = ViewDatabase::load(o->db);
+      const BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
+      const std::size_t n = std::min(ds.images.size(), static_cast<std::size_t>(o->frames));
+      for (std::size_t i = 0; i < n; ++i) {
+        const BopFrame bf = load_bop_frame(ds.images[i]);
+        frames.push_back({frame_from_depth(bf.depth, bf.K), ds.images[i].gt});
+      }
+      source = fmt::format("{} ({}, {} images)", o->dataset, o->split, n);
+    }
+    if (frames.empty()) throw Error("bench: no frames to run");
+    RecognizerOptions options;
+    options.split_touching = !o->no_split;
+    const Recognizer recognizer(db, options);
+
+    struct Series {
+      const char* name;
+      std::vector<double> ms;
+    };
+    std::vector<Series> stages = {{"downsample", {}}, {"segment", {}}, {"normals", {}}, {"vfh", {}}, {"match", {}},
+                                  {"crh", {}},        {"icp", {}},     {"verify", {}},  {"total", {}}};
+    std::vector<double> hypotheses, per_hypothesis_ms;
+    std::size_t targets = 0, found = 0, wrong = 0;
+    {
+      ProgressBar bar("bench", frames.size());
+      for (std::size_t i = 0; i < frames.size(); ++i) {
+        const Recognition r = recognizer.recognize(frames[i].frame);
+        const StageTimes& t = r.times;
+        const double values[] = {t.downsample_ms, t.segment_ms, t.normals_ms, t.vfh_ms, t.match_ms,
+                                 t.crh_ms,        t.icp_ms,     t.verify_ms,  t.total_ms};
+        for (std::size_t s = 0; s < stages.size(); ++s) stages[s].ms.push_back(values[s]);
+        hypotheses.push_back(static_cast<double>(r.hypotheses));
+        if (r.hypotheses > 0) per_hypothesis_ms.push_back((t.icp_ms + t.verify_ms) / static_cast<double>(r.hypotheses));
+        // Right: a detection of the same object within ADD-S 10 % of its diameter; anything else is wrong.
+        targets += frames[i].gt.size();
+        std::vector<char> paired(frames[i].gt.size(), 0);
+        for (const Detection& d : r.detections) {
+          const DatabaseObject& object = db.objects[d.object_index];
+          bool right = false;
+          for (std::size_t g = 0; g < frames[i].gt.size() && !right; ++g) {
+            if (paired[g] || frames[i].gt[g].obj_id != d.object_id) continue;
+            right = add_s_error(d.T_camera_object, frames[i].gt[g].T_camera_object, object.model_points) <
+                    0.1 * object.diameter_m;
+            if (right) paired[g] = 1;
+          }
+          found += right ? 1 : 0;
+          wrong += right ? 0 : 1;
+        }
+        bar.update(i + 1);
+      }
+    }
+    const double total_s = [&] {
+      double s = 0;
+      for (double v : stages.back().ms) s += v / 1000;
+      return s;
+    }();
+    const double fps = static_cast<double>(frames.size()) / total_s;
+    fmt::print("{}: {} frames, {} threads, database of {} objects x {} views\n", source, frames.size(), thread_count(),
+               db.objects.size(), db.views.size());
+    if (db_build_ms > 0) fmt::print("database build: {:.0f} ms\n", db_build_ms);
+    fmt::print("{:<12} {:>9} {:>9} {:>9} {:>9} {:>9}\n", "stage (ms)", "median", "p90", "p95", "max", "mean");
+    nlohmann::json jstages;
+    for (const Series& s : stages) {
+      double mean = 0;
+      for (double v : s.ms) mean += v / static_cast<double>(s.ms.size());
+      const double med = percentile(s.ms, 0.5), p90 = percentile(s.ms, 0.9), p95 = percentile(s.ms, 0.95),
+                   mx = percentile(s.ms, 1.0);
+      fmt::print("{:<12} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f}\n", s.name, med, p90, p95, mx, mean);
+      jstages[s.name] = {{"median", med}, {"p90", p90}, {"p95", p95}, {"max", mx}, {"mean", mean}};
+    }
+    const double hyp_med = percentile(hypotheses, 0.5), per_hyp = percentile(per_hypothesis_ms, 0.5);
+    fmt::print("{:.1f} frames per second; {:.0f} hypotheses per frame (median), ICP + verify {:.2f} ms per hypothesis "
+               "(median)\n", fps, hyp_med, per_hyp);
+    if (targets > 0) {
+      fmt::print("poses right (ADD-S < 10 % of the diameter): {} of {} ({:.1f} %); wrong detections: {}\n", found, targets,
+                 100.0 * static_cast<double>(found) / static_cast<double>(targets), wrong);
+    }
+    const double rss = peak_rss_mib();
+    fmt::print("peak resident memory: {:.0f} MiB\n", rss);
+    if (!o->json.empty()) {
+      const nlohmann::json j = {{"source", source}, {"frames", frames.size()}, {"threads", thread_count()},
+                                {"objects", db.objects.size()}, {"views", db.views.size()},
+                                {"db_build_ms", db_build_ms}, {"stages_ms", jstages}, {"fps", fps},
+                                {"hypotheses_median", hyp_med}, {"icp_verify_per_hypothesis_ms", per_hyp},
+                                {"targets", targets}, {"right", found}, {"wrong", wrong}, {"peak_rss_mib", rss}};
+      write_file_atomic(o->json, j.dump(2) + "\n");
+    }
+    exit_code = 0;
+  });
+}
+
+}  // namespace viewpose::cli
