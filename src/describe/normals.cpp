@@ -2,19 +2,33 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
+#include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
-#include "viewpose/core/kdtree.hpp"
 
 namespace viewpose {
 
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// Normal (towards the viewpoint) and curvature of the plane whose scatter matrix is `cov`.
+void plane_of_covariance(const Eigen::Matrix3d& cov, const Eigen::Vector3f& point, const Eigen::Vector3f& viewpoint,
+                         Eigen::Vector3f& normal, float& curvature) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(cov);  // eigenvalues in increasing order
+  const Eigen::Vector3d l = eig.eigenvalues();
+  Eigen::Vector3f n = eig.eigenvectors().col(0).cast<float>();
+  if (n.dot(viewpoint - point) < 0) n = -n;
+  normal = n;
+  const double sum = l.sum();
+  curvature = sum > 0 ? static_cast<float>(std::max(0.0, l[0]) / sum) : 0.0f;
+}
 
 // Plane through the neighbours of point i; writes its normal and curvature.
 template <typename Neighbours>
@@ -34,34 +48,109 @@ void fit_normal(const PointCloud& cloud, std::size_t i, const Neighbours& neighb
     const Eigen::Vector3d d = cloud.points[neighbours(k)].template cast<double>() - mean;
     cov.noalias() += d * d.transpose();
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  eig.computeDirect(cov);  // eigenvalues in increasing order
-  const Eigen::Vector3d l = eig.eigenvalues();
-  Eigen::Vector3f n = eig.eigenvectors().col(0).cast<float>();
-  if (n.dot(viewpoint - cloud.points[i]) < 0) n = -n;
-  normal = n;
-  const double sum = l.sum();
-  curvature = sum > 0 ? static_cast<float>(std::max(0.0, l[0]) / sum) : 0.0f;
+  plane_of_covariance(cov, cloud.points[i], viewpoint, normal, curvature);
 }
 
 }  // namespace
 
 void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
   if (!(options.radius_m > 0)) throw Error(fmt::format("normals: radius {} must be positive", options.radius_m));
-  const KdTree tree(cloud.points);
   cloud.normals.assign(cloud.size(), Eigen::Vector3f::Constant(kNaN));
   cloud.curvature.assign(cloud.size(), kNaN);
-  const auto n = static_cast<std::ptrdiff_t>(cloud.size());
+  // Points binned into cubes half the radius wide: a point's neighbours are among the points of
+  // the cubes whose nearest corner lies within the radius of its own cube. The candidates are
+  // gathered once per cube and shared by all its points, which makes this several times faster
+  // than a radius search per point in a tree, with the same neighbours.
+  const float r = options.radius_m, inv = 2.0f / r, r2 = r * r;
+  constexpr std::int64_t kOffset = 1 << 20, kMask = (1 << 21) - 1;
+  const auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
+    return (static_cast<std::uint64_t>(x) << 42) | (static_cast<std::uint64_t>(y) << 21) | static_cast<std::uint64_t>(z);
+  };
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
+  keyed.reserve(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3f& p = cloud.points[i];
+    if (!p.allFinite()) continue;
+    std::int64_t c[3];
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) {
+      c[a] = static_cast<std::int64_t>(std::floor(p[a] * inv)) + kOffset;
+      inside = inside && c[a] >= 2 && c[a] <= kMask - 2;
+    }
+    if (inside) keyed.emplace_back(key(c[0], c[1], c[2]), static_cast<std::uint32_t>(i));
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint64_t> cubes;
+  std::vector<std::size_t> first;
+  for (std::size_t k = 0; k < keyed.size(); ++k) {
+    if (k == 0 || keyed[k].first != keyed[k - 1].first) {
+      cubes.push_back(keyed[k].first);
+      first.push_back(k);
+    }
+  }
+  first.push_back(keyed.size());
+  // Squared gap, in cubes, between two cubes `d` apart along one axis.
+  const auto gap = [](std::int64_t d) { return std::max<std::int64_t>(std::abs(d) - 1, 0) * std::max<std::int64_t>(std::abs(d) - 1, 0); };
+  const auto n = static_cast<std::ptrdiff_t>(cubes.size());
 #pragma omp parallel
   {
-    std::vector<std::uint32_t> neighbours;
-#pragma omp for schedule(dynamic, 256)
-    for (std::ptrdiff_t s = 0; s < n; ++s) {
-      const auto i = static_cast<std::size_t>(s);
-      if (!cloud.points[i].allFinite()) continue;
-      tree.radius_search(cloud.points[i], options.radius_m, neighbours);
-      fit_normal(cloud, i, [&](std::size_t k) { return neighbours[k]; }, neighbours.size(), options.viewpoint,
-                 cloud.normals[i], cloud.curvature[i]);
+    std::vector<float> cx, cy, cz;  // the candidates, one array per coordinate
+    std::vector<float> scratch;  // six arrays of the candidates' length, grown and never shrunk
+#pragma omp for schedule(dynamic, 8)
+    for (std::ptrdiff_t a = 0; a < n; ++a) {
+      const std::uint64_t c = cubes[static_cast<std::size_t>(a)];
+      const auto x = static_cast<std::int64_t>(c >> 42), y = static_cast<std::int64_t>((c >> 21) & kMask),
+                 z = static_cast<std::int64_t>(c & kMask);
+      cx.clear();
+      cy.clear();
+      cz.clear();
+      for (std::int64_t ox = -2; ox <= 2; ++ox)
+        for (std::int64_t oy = -2; oy <= 2; ++oy) {
+          if (gap(ox) + gap(oy) > 4) continue;
+          // The cubes of a column (z - 2 .. z + 2) are consecutive in the sorted order.
+          auto it = std::lower_bound(cubes.begin(), cubes.end(), key(x + ox, y + oy, z - 2));
+          for (; it != cubes.end() && *it <= key(x + ox, y + oy, z + 2); ++it) {
+            const auto oz = static_cast<std::int64_t>(*it & kMask) - z;
+            if (gap(ox) + gap(oy) + gap(oz) > 4) continue;  // no point of that cube is within the radius
+            const auto b = static_cast<std::size_t>(it - cubes.begin());
+            for (std::size_t k = first[b]; k < first[b + 1]; ++k) {
+              const Eigen::Vector3f& q = cloud.points[keyed[k].second];
+              cx.push_back(q.x());
+              cy.push_back(q.y());
+              cz.push_back(q.z());
+            }
+          }
+        }
+      const std::size_t m = cx.size();
+      if (scratch.size() < 6 * m) scratch.resize(6 * m);
+      for (std::size_t k = first[static_cast<std::size_t>(a)]; k < first[static_cast<std::size_t>(a) + 1]; ++k) {
+        const std::uint32_t i = keyed[k].second;
+        const Eigen::Vector3f& p = cloud.points[i];
+        // Sums of the neighbours' offsets from p and of their products, branch-free over all
+        // candidates with a 0/1 weight (Eigen's packet operations vectorize it); offsets of a few
+        // centimetres keep single precision exact enough.
+        const auto len = static_cast<Eigen::Index>(m);
+        const Eigen::Map<const Eigen::ArrayXf> X(cx.data(), len), Y(cy.data(), len), Z(cz.data(), len);
+        Eigen::Map<Eigen::ArrayXf> dx(scratch.data(), len), dy(scratch.data() + m, len), dz(scratch.data() + 2 * m, len),
+            w(scratch.data() + 3 * m, len), wx(scratch.data() + 4 * m, len), wy(scratch.data() + 5 * m, len);
+        dx = X - p.x();
+        dy = Y - p.y();
+        dz = Z - p.z();
+        w = (dx.square() + dy.square() + dz.square() <= r2).select(Eigen::ArrayXf::Ones(len), Eigen::ArrayXf::Zero(len));
+        const float count = w.sum();
+        wx = w * dx;
+        wy = w * dy;
+        const float sx = wx.sum(), sy = wy.sum(), sz = (w * dz).sum();
+        const float sxx = (wx * dx).sum(), sxy = (wx * dy).sum(), sxz = (wx * dz).sum();
+        const float syy = (wy * dy).sum(), syz = (wy * dz).sum(), szz = (w * dz.square()).sum();
+        if (count < 3) continue;  // stays NaN
+        const double nn = count, mx = sx / nn, my = sy / nn, mz = sz / nn;
+        Eigen::Matrix3d cov;
+        cov << sxx - nn * mx * mx, sxy - nn * mx * my, sxz - nn * mx * mz,
+               sxy - nn * mx * my, syy - nn * my * my, syz - nn * my * mz,
+               sxz - nn * mx * mz, syz - nn * my * mz, szz - nn * mz * mz;
+        plane_of_covariance(cov, p, options.viewpoint, cloud.normals[i], cloud.curvature[i]);
+      }
     }
   }
 }

@@ -1,5 +1,6 @@
 #include "viewpose/pose/icp.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Cholesky>
@@ -9,6 +10,11 @@ namespace viewpose {
 
 IcpTarget::IcpTarget(std::vector<Eigen::Vector3f> p, std::vector<Eigen::Vector3f> n)
     : points(std::move(p)), normals(std::move(n)), tree(points) {}
+
+const NearestGrid& IcpTarget::grid(float cell_m, float margin_m) const {
+  std::call_once(grid_once_, [&] { grid_ = std::make_unique<NearestGrid>(points, cell_m, margin_m); });
+  return *grid_;
+}
 
 IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const IcpTarget& target,
                              const Transform& T_initial, const IcpOptions& o) {
@@ -24,6 +30,15 @@ IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const 
     for (std::size_t i = 0; i < o.max_source_points; ++i) subset.push_back(all_source[static_cast<std::size_t>(static_cast<double>(i) * step)]);
     source = subset;
   }
+  const NearestGrid* grid = nullptr;
+  if (o.grid_cell_m > 0) {
+    float reach = 0;
+    for (float d : o.max_correspondence_m) reach = std::max(reach, d);
+    grid = &target.grid(o.grid_cell_m, reach);
+  }
+  const auto nearest = [&](const Eigen::Vector3f& p, std::uint32_t& k, float& d2) {
+    return grid ? grid->nearest(p, k, d2) : target.tree.nearest(p, k, d2);
+  };
   for (std::size_t stage = 0; stage < o.max_correspondence_m.size(); ++stage) {
     const float max_d = o.max_correspondence_m[stage];
     const float max_d2 = max_d * max_d;
@@ -42,7 +57,7 @@ IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const 
         const Eigen::Vector3f p = R * s + t;
         std::uint32_t k;
         float d2;
-        if (!target.tree.nearest(p, k, d2) || d2 > max_d2) continue;
+        if (!nearest(p, k, d2) || d2 > max_d2) continue;
         const Eigen::Vector3d n = target.normals[k].cast<double>();
         if (!n.allFinite()) continue;
         const Eigen::Vector3d pd = p.cast<double>();

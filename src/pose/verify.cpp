@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "viewpose/core/point_cloud.hpp"
 #include "viewpose/render/rasterizer.hpp"
 #include "viewpose/render/sensor_model.hpp"
 
@@ -17,14 +18,40 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
                          const CameraIntrinsics& K, std::span<const Eigen::Vector3f> cluster_points,
                          const VerifyOptions& o) {
   Verification v;
-  // The model is drawn into a frame wider than the image by `border` pixels on every side, so that
-  // whatever of it falls outside the image counts as unseen rather than not existing.
+  const int W = K.width, H = K.height, m = o.edge_margin_px;
+  // The model is drawn into the window its bounding box projects to, plus a margin for the edge
+  // test, which may reach up to `border` pixels beyond the image on every side: whatever of the
+  // model falls outside the image counts as unseen rather than not existing. Pixels outside the
+  // window hold no model and need no look.
   constexpr int border = 64;
+  int u0 = -border, v0 = -border, u1 = W + border, v1 = H + border;  // window [u0, u1) x [v0, v1)
+  {
+    const BoundingBox box = shape.mesh && !shape.mesh->triangles.empty() ? bounding_box(*shape.mesh) : bounding_box(std::vector<Eigen::Vector3f>(shape.points.begin(), shape.points.end()));
+    double lo_u = 1e9, lo_v = 1e9, hi_u = -1e9, hi_v = -1e9;
+    bool in_front = !box.empty;
+    for (int corner = 0; corner < 8 && in_front; ++corner) {
+      const Eigen::Vector3d p(corner & 1 ? box.max.x() : box.min.x(), corner & 2 ? box.max.y() : box.min.y(),
+                              corner & 4 ? box.max.z() : box.min.z());
+      const Eigen::Vector3d c = T_camera_object * p;
+      in_front = c.z() > 1e-6;
+      const Eigen::Vector2d uv = K.project(c);
+      lo_u = std::min(lo_u, uv.x()), hi_u = std::max(hi_u, uv.x());
+      lo_v = std::min(lo_v, uv.y()), hi_v = std::max(hi_v, uv.y());
+    }
+    // A box reaching behind the camera projects to no window: draw the whole frame.
+    if (in_front) {
+      const int pad = m + 2;
+      u0 = std::clamp(static_cast<int>(std::floor(lo_u)) - pad, -border, W + border);
+      v0 = std::clamp(static_cast<int>(std::floor(lo_v)) - pad, -border, H + border);
+      u1 = std::clamp(static_cast<int>(std::ceil(hi_u)) + pad + 1, u0, W + border);
+      v1 = std::clamp(static_cast<int>(std::ceil(hi_v)) + pad + 1, v0, H + border);
+    }
+  }
   CameraIntrinsics Kx = K;
-  Kx.width += 2 * border;
-  Kx.height += 2 * border;
-  Kx.cx += border;
-  Kx.cy += border;
+  Kx.width = std::max(1, u1 - u0);
+  Kx.height = std::max(1, v1 - v0);
+  Kx.cx -= u0;
+  Kx.cy -= v0;
   RenderedFrame model;
   if (shape.mesh && !shape.mesh->triangles.empty()) {
     const MeshInstance inst{shape.mesh, T_camera_object};
@@ -32,26 +59,29 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
   } else {
     model = render_points(shape.points, T_camera_object, Kx, shape.point_spacing_m);
   }
-  const int W = K.width, H = K.height, m = o.edge_margin_px;
-  // Model depth at image pixel (col, row), which may lie in the border.
+  // Model depth at image pixel (col, row), which may lie outside the image.
   const auto z_model = [&](int col, int row) -> float {
-    const int x = col + border, y = row + border;
+    const int x = col - u0, y = row - v0;
     return (x < 0 || y < 0 || x >= Kx.width || y >= Kx.height) ? NAN : model.depth.at(x, y);
   };
-  // Pixels the cluster covers, each of its points splatted over its voxel's footprint.
-  std::vector<char> in_cluster(static_cast<std::size_t>(W) * static_cast<std::size_t>(H), 0);
+  // Pixels the cluster covers (within the window), each of its points splatted over its voxel's footprint.
+  const int cw = std::max(0, std::min(u1, W) - std::max(u0, 0)), ch = std::max(0, std::min(v1, H) - std::max(v0, 0));
+  const int cu0 = std::max(u0, 0), cv0 = std::max(v0, 0);
+  std::vector<char> in_cluster(static_cast<std::size_t>(cw) * static_cast<std::size_t>(ch), 0);
+  const auto cluster_at = [&](int x, int y) -> char& {
+    return in_cluster[static_cast<std::size_t>(y - cv0) * static_cast<std::size_t>(cw) + static_cast<std::size_t>(x - cu0)];
+  };
   for (const Eigen::Vector3f& p : cluster_points) {
     if (!p.allFinite() || !(p.z() > 0)) continue;
     const Eigen::Vector2d uv = K.project(p.cast<double>());
     const int half = std::max(1, static_cast<int>(std::ceil(0.5 * K.fx * shape.point_spacing_m / p.z())));
     const int cu = static_cast<int>(std::lround(uv.x())), cv = static_cast<int>(std::lround(uv.y()));
-    for (int y = std::max(0, cv - half); y <= std::min(H - 1, cv + half); ++y)
-      for (int x = std::max(0, cu - half); x <= std::min(W - 1, cu + half); ++x)
-        in_cluster[static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x)] = 1;
+    for (int y = std::max(cv0, cv - half); y <= std::min(cv0 + ch - 1, cv + half); ++y)
+      for (int x = std::max(cu0, cu - half); x <= std::min(cu0 + cw - 1, cu + half); ++x) cluster_at(x, y) = 1;
   }
   std::size_t supported = 0;
-  for (int y = -border; y < H + border; ++y) {
-    for (int x = -border; x < W + border; ++x) {
+  for (int y = v0; y < v1; ++y) {
+    for (int x = u0; x < u1; ++x) {
       const float zm = z_model(x, y);
       if (!std::isfinite(zm)) continue;
       const float tol = depth_tolerance(zm, o);
@@ -68,7 +98,7 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
         continue;
       }
       const float zo = observed.at(x, y);
-      const bool cluster_here = in_cluster[static_cast<std::size_t>(y) * static_cast<std::size_t>(W) + static_cast<std::size_t>(x)];
+      const bool cluster_here = cluster_at(x, y);
       if (!std::isfinite(zo)) ++v.unknown;
       else if (zo < zm - tol) {
         // Something in front hides the model here. If that something is the cluster the model is

@@ -15,7 +15,7 @@ struct NormalOptions {
   int max_window_px = 8;    ///< organized path only: largest half-window searched
 };
 
-/// Fills cloud.normals and cloud.curvature (radius search in a k-d tree; any cloud).
+/// Fills cloud.normals and cloud.curvature (neighbours from a grid of radius-wide cubes; any cloud).
 void estimate_normals(PointCloud& cloud, const NormalOptions& options = {});
 
 /// The same for an organized cloud, with neighbours taken from the image window around each pixel

@@ -3,12 +3,15 @@
 // (the object's model cloud with normals, object frame). Coarse to fine: correspondences are first
 // accepted up to the largest distance of the schedule, then the smaller ones, so that the few
 // centimetres a centroid-and-roll guess is off still converge, and the final fit ignores outliers.
+#include <memory>
+#include <mutex>
 #include <span>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "viewpose/core/kdtree.hpp"
+#include "viewpose/core/nearest_grid.hpp"
 #include "viewpose/core/transform.hpp"
 
 namespace viewpose {
@@ -16,12 +19,16 @@ namespace viewpose {
 struct IcpOptions {
   std::vector<float> max_correspondence_m = {0.04f, 0.02f, 0.01f};  ///< one stage each
   int max_iterations_per_stage = 15;
-  double convergence_translation_m = 1e-5;  ///< a stage ends when a step moves less than this...
-  double convergence_rotation_rad = 1e-5;   ///< ...and turns less than this
+  double convergence_translation_m = 1e-4;  ///< a stage ends when a step moves less than this...
+  double convergence_rotation_rad = 1e-4;   ///< ...and turns less than this
   std::size_t min_correspondences = 12;
   /// At most this many source points take part, evenly spread over the source (0: all). A few
   /// hundred points pin six parameters down as well as thousands; the time is linear in them.
   std::size_t max_source_points = 400;
+  /// Correspondences are looked up in the target's nearest-point grid of this cell size (constant
+  /// time; the point found is within half a cell diagonal of the nearest, which a point-to-plane
+  /// residual hardly feels, as it ignores slips along the surface). 0: exact k-d tree search.
+  float grid_cell_m = 0.003f;
   /// After the first stage, give up (not converged) when fewer source points than this share found
   /// the target: a wrong hypothesis is dropped early instead of being refined to the end.
   double min_fitness_after_first_stage = 0.5;
@@ -35,12 +42,20 @@ struct IcpResult {
   bool converged = false;  ///< the last stage converged with enough correspondences
 };
 
-/// A model surface ready for ICP: points, normals and their k-d tree.
+/// A model surface ready for ICP: points, normals, their k-d tree, and a nearest-point grid built
+/// on first use (tens of milliseconds and a few megabytes per object, so only objects that are
+/// tried pay for it). Safe to share between threads.
 struct IcpTarget {
   IcpTarget(std::vector<Eigen::Vector3f> points, std::vector<Eigen::Vector3f> normals);
   std::vector<Eigen::Vector3f> points;
   std::vector<Eigen::Vector3f> normals;
   KdTree tree;
+  /// The grid of `cell_m` cells reaching `margin_m` beyond the points; the first call's sizes stay.
+  const NearestGrid& grid(float cell_m, float margin_m) const;
+
+ private:
+  mutable std::once_flag grid_once_;
+  mutable std::unique_ptr<NearestGrid> grid_;
 };
 
 IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> source, const IcpTarget& target,
