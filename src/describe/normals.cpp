@@ -1,6 +1,7 @@
 #include "viewpose/describe/normals.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -95,7 +96,6 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
 #pragma omp parallel
   {
     std::vector<float> cx, cy, cz;  // the candidates, one array per coordinate
-    std::vector<float> scratch;  // six arrays of the candidates' length, grown and never shrunk
 #pragma omp for schedule(dynamic, 8)
     for (std::ptrdiff_t a = 0; a < n; ++a) {
       const std::uint64_t c = cubes[static_cast<std::size_t>(a)];
@@ -122,27 +122,27 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
           }
         }
       const std::size_t m = cx.size();
-      if (scratch.size() < 6 * m) scratch.resize(6 * m);
       for (std::size_t k = first[static_cast<std::size_t>(a)]; k < first[static_cast<std::size_t>(a) + 1]; ++k) {
         const std::uint32_t i = keyed[k].second;
         const Eigen::Vector3f& p = cloud.points[i];
-        // Sums of the neighbours' offsets from p and of their products, branch-free over all
-        // candidates with a 0/1 weight (Eigen's packet operations vectorize it); offsets of a few
-        // centimetres keep single precision exact enough.
-        const auto len = static_cast<Eigen::Index>(m);
-        const Eigen::Map<const Eigen::ArrayXf> X(cx.data(), len), Y(cy.data(), len), Z(cz.data(), len);
-        Eigen::Map<Eigen::ArrayXf> dx(scratch.data(), len), dy(scratch.data() + m, len), dz(scratch.data() + 2 * m, len),
-            w(scratch.data() + 3 * m, len), wx(scratch.data() + 4 * m, len), wy(scratch.data() + 5 * m, len);
-        dx = X - p.x();
-        dy = Y - p.y();
-        dz = Z - p.z();
-        w = (dx.square() + dy.square() + dz.square() <= r2).select(Eigen::ArrayXf::Ones(len), Eigen::ArrayXf::Zero(len));
-        const float count = w.sum();
-        wx = w * dx;
-        wy = w * dy;
-        const float sx = wx.sum(), sy = wy.sum(), sz = (w * dz).sum();
-        const float sxx = (wx * dx).sum(), sxy = (wx * dy).sum(), sxz = (wx * dz).sum();
-        const float syy = (wy * dy).sum(), syz = (wy * dz).sum(), szz = (w * dz.square()).sum();
+        // Sums of the neighbours' offsets from p and of their products, in one branch-free pass
+        // over all candidates with a 0/1 weight (the sign bit of d2 - r2), which vectorizes;
+        // offsets of a few centimetres keep single precision exact enough.
+        const float px = p.x(), py = p.y(), pz = p.z();
+        const float* ax = cx.data();
+        const float* ay = cy.data();
+        const float* az = cz.data();
+        float count = 0, sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
+#pragma omp simd reduction(+ : count, sx, sy, sz, sxx, sxy, sxz, syy, syz, szz)
+        for (std::size_t j = 0; j < m; ++j) {
+          const float dx = ax[j] - px, dy = ay[j] - py, dz = az[j] - pz;
+          const float w = static_cast<float>(std::bit_cast<std::uint32_t>(dx * dx + dy * dy + dz * dz - r2) >> 31);
+          const float wx = w * dx, wy = w * dy, wz = w * dz;
+          count += w;
+          sx += wx, sy += wy, sz += wz;
+          sxx += wx * dx, sxy += wx * dy, sxz += wx * dz;
+          syy += wy * dy, syz += wy * dz, szz += wz * dz;
+        }
         if (count < 3) continue;  // stays NaN
         const double nn = count, mx = sx / nn, my = sy / nn, mz = sz / nn;
         Eigen::Matrix3d cov;

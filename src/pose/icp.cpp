@@ -30,12 +30,7 @@ IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const 
     for (std::size_t i = 0; i < o.max_source_points; ++i) subset.push_back(all_source[static_cast<std::size_t>(static_cast<double>(i) * step)]);
     source = subset;
   }
-  const NearestGrid* grid = nullptr;
-  if (o.grid_cell_m > 0) {
-    float reach = 0;
-    for (float d : o.max_correspondence_m) reach = std::max(reach, d);
-    grid = &target.grid(o.grid_cell_m, reach);
-  }
+  const NearestGrid* grid = o.grid_cell_m > 0 ? &target.grid(o.grid_cell_m, o.reach_m()) : nullptr;
   const auto nearest = [&](const Eigen::Vector3f& p, std::uint32_t& k, float& d2) {
     return grid ? grid->nearest(p, k, d2) : target.tree.nearest(p, k, d2);
   };

@@ -11,7 +11,7 @@
 namespace viewpose {
 
 float depth_tolerance(float z_m, const VerifyOptions& o) {
-  return o.base_tolerance_m + o.noise_factor * static_cast<float>(axial_noise_sigma(z_m, 0.0));
+  return o.base_tolerance_m + o.noise_factor * axial_noise_sigma_frontal(z_m);
 }
 
 Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_object, const DepthImage& observed,

@@ -92,7 +92,7 @@ SensorModel SensorModel::ideal() {
 
 double axial_noise_sigma(double z_m, double theta_rad) {
   const double t = std::min(theta_rad, std::numbers::pi / 2 - 0.01);
-  return 0.0012 + 0.0019 * (z_m - 0.4) * (z_m - 0.4) +
+  return axial_noise_sigma_frontal(z_m) +
          0.0001 / std::sqrt(z_m) * t * t / ((std::numbers::pi / 2 - t) * (std::numbers::pi / 2 - t));
 }
 

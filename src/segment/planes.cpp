@@ -186,19 +186,14 @@ Patch largest_patch(std::span<const Eigen::Vector3f> points, const Plane& plane,
 
 PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o) {
   PlaneRemoval out;
-  std::vector<std::uint32_t> finite;
-  finite.reserve(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    if (cloud.points[i].allFinite()) finite.push_back(static_cast<std::uint32_t>(i));
-  }
-  // Planes are searched for among `pool`, an even sample of the cloud; a plane that is not large
-  // is left in the cloud but taken out of the pool, so that a smaller wall behind it can still be found.
+  // Planes are searched for among `pool`, an even sample of the cloud's finite points; a plane that
+  // is not large is left in the cloud but taken out of the pool, so that a smaller wall behind it
+  // can still be found.
+  const std::size_t stride = o.max_sample_points > 0 ? std::max<std::size_t>(1, cloud.size() / o.max_sample_points) : 1;
   std::vector<std::uint32_t> pool;
-  if (o.max_sample_points > 0 && finite.size() > o.max_sample_points) {
-    const double step = static_cast<double>(finite.size()) / static_cast<double>(o.max_sample_points);
-    for (std::size_t k = 0; k < o.max_sample_points; ++k) pool.push_back(finite[static_cast<std::size_t>(static_cast<double>(k) * step)]);
-  } else {
-    pool = finite;
+  pool.reserve(cloud.size() / stride + 1);
+  for (std::size_t i = 0; i < cloud.size(); i += stride) {
+    if (cloud.points[i].allFinite()) pool.push_back(static_cast<std::uint32_t>(i));
   }
   PlaneOptions round = o;
   // Cells of the inlier band's width: neighbouring cells link points up to about 2.8 cells apart.
@@ -220,14 +215,19 @@ PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o)
     plane.extent_m = patch_extent;
     out.removed.push_back(std::move(plane));
   }
-  // Every point, not just the sample, is tested against the planes found.
-  std::vector<char> on_plane(cloud.size(), 0);
-  for (Plane& plane : out.removed) {
-    plane.inliers = inliers_of(cloud.points, finite, plane.coefficients, o.distance_threshold_m);
-    for (std::uint32_t i : plane.inliers) on_plane[i] = 1;
-  }
-  for (std::uint32_t i : finite) {
-    if (!on_plane[i]) out.remaining.push_back(i);
+  // Every point, not just the sample, is tested against the planes found, in one pass.
+  for (Plane& plane : out.removed) plane.inliers.clear();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3f& p = cloud.points[i];
+    if (!p.allFinite()) continue;
+    bool on_plane = false;
+    for (Plane& plane : out.removed) {
+      if (std::abs(plane.coefficients.head<3>().dot(p) + plane.coefficients[3]) <= o.distance_threshold_m) {
+        plane.inliers.push_back(static_cast<std::uint32_t>(i));
+        on_plane = true;
+      }
+    }
+    if (!on_plane) out.remaining.push_back(static_cast<std::uint32_t>(i));
   }
   return out;
 }

@@ -3,6 +3,7 @@
 // (the object's model cloud with normals, object frame). Coarse to fine: correspondences are first
 // accepted up to the largest distance of the schedule, then the smaller ones, so that the few
 // centimetres a centroid-and-roll guess is off still converge, and the final fit ignores outliers.
+#include <algorithm>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -29,6 +30,12 @@ struct IcpOptions {
   /// time; the point found is within half a cell diagonal of the nearest, which a point-to-plane
   /// residual hardly feels, as it ignores slips along the surface). 0: exact k-d tree search.
   float grid_cell_m = 0.003f;
+  /// The largest correspondence distance of the schedule: how far around the model the grid reaches.
+  float reach_m() const {
+    float reach = 0;
+    for (float d : max_correspondence_m) reach = std::max(reach, d);
+    return reach;
+  }
   /// After the first stage, give up (not converged) when fewer source points than this share found
   /// the target: a wrong hypothesis is dropped early instead of being refined to the end.
   double min_fitness_after_first_stage = 0.5;

@@ -37,6 +37,9 @@ struct RecognizerOptions {
   /// verified in turn) and keep the best: objects that are nearly symmetric (a jug whose handle is a
   /// small share of its surface) otherwise come out the wrong way round about as often as not.
   bool try_half_turns = true;
+  /// Refine and verify independent hypotheses (the half turns) on several threads. The result is
+  /// the same either way.
+  bool parallel_hypotheses = true;
   /// Report a symmetric object's pose in one canonical form among its equivalent ones (rotation
   /// nearest the camera's axes), so that a box or a can does not flip from frame to frame.
   bool canonical_poses = true;

@@ -36,6 +36,12 @@ struct SensorModel {
 /// between the surface normal and the viewing ray: Nguyen et al. 2012, eq. 2, including the
 /// disparity quantization of the device they measured.
 double axial_noise_sigma(double z_m, double theta_rad);
+/// Its first term, all there is for a surface facing the sensor (theta = 0); inline, as
+/// verification asks for it at every pixel.
+template <typename Real>
+inline Real axial_noise_sigma_frontal(Real z_m) {
+  return Real(0.0012) + Real(0.0019) * (z_m - Real(0.4)) * (z_m - Real(0.4));
+}
 
 /// Lateral noise (pixels) at incidence theta: Nguyen et al. 2012, 0.8 + 0.035 theta / (pi/2 - theta).
 double lateral_noise_sigma_px(double theta_rad);
