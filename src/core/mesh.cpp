@@ -109,4 +109,28 @@ TriangleMesh make_box_mesh(const Eigen::Vector3f& size) {
   return mesh;
 }
 
+int closed_mesh_winding(const TriangleMesh& mesh) {
+  if (mesh.triangles.empty()) return 0;
+  const auto edge = [](std::uint32_t a, std::uint32_t b) { return (static_cast<std::uint64_t>(a) << 32) | b; };
+  std::vector<std::uint64_t> edges;
+  edges.reserve(3 * mesh.triangles.size());
+  double volume = 0;  // six times the signed volume enclosed, by the divergence theorem
+  for (const auto& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      if (t[k] >= mesh.vertices.size()) return 0;
+      edges.push_back(edge(t[k], t[(k + 1) % 3]));
+    }
+    const Eigen::Vector3d a = mesh.vertices[t[0]].cast<double>(), b = mesh.vertices[t[1]].cast<double>(),
+                          c = mesh.vertices[t[2]].cast<double>();
+    volume += a.dot(b.cross(c));
+  }
+  std::sort(edges.begin(), edges.end());
+  // Each directed edge once, and its reverse once.
+  if (std::adjacent_find(edges.begin(), edges.end()) != edges.end()) return 0;
+  for (std::uint64_t e : edges) {
+    if (!std::binary_search(edges.begin(), edges.end(), (e << 32) | (e >> 32))) return 0;
+  }
+  return volume > 0 ? 1 : volume < 0 ? -1 : 0;
+}
+
 }  // namespace viewpose

@@ -356,7 +356,9 @@ ViewDatabase build_view_database(std::span<const ObjectModel> objects, const Dat
     const BoundingBox box = bounding_box(mesh);
     const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
     const std::vector<Transform> poses = view_sphere_poses(centre, params.distance_m, params.subdivisions);
-    const std::vector<RenderedFrame> frames = render_views(mesh, poses, params.camera);
+    RenderOptions render_options;
+    render_options.closed_winding = closed_mesh_winding(mesh);  // the same pictures, sooner
+    const std::vector<RenderedFrame> frames = render_views(mesh, poses, params.camera, render_options);
     std::vector<ViewEntry> entries(poses.size());
 #pragma omp parallel for schedule(dynamic)
     for (std::size_t i = 0; i < poses.size(); ++i) {

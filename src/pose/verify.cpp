@@ -55,7 +55,9 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
   RenderedFrame model;
   if (shape.mesh && !shape.mesh->triangles.empty()) {
     const MeshInstance inst{shape.mesh, T_camera_object};
-    model = render(std::span(&inst, 1), Kx);
+    RenderOptions options;
+    options.closed_winding = shape.closed_winding;
+    model = render(std::span(&inst, 1), Kx, options);
   } else {
     model = render_points(shape.points, T_camera_object, Kx, shape.point_spacing_m);
   }

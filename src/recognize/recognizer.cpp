@@ -19,6 +19,7 @@ Recognizer::Recognizer(const ViewDatabase& db, RecognizerOptions options) : db_(
   if (db.views.empty()) throw Error("recognize: the view database holds no views");
   for (const DatabaseObject& o : db.objects) {
     targets_.push_back(std::make_unique<IcpTarget>(o.model_points, o.model_normals));
+    closed_winding_.push_back(closed_mesh_winding(o.mesh));
     largest_diameter_m_ = std::max(largest_diameter_m_, o.diameter_m);
   }
   // Scenes are described at the database's resolution, so that their VFHs are comparable.
@@ -26,6 +27,11 @@ Recognizer::Recognizer(const ViewDatabase& db, RecognizerOptions options) : db_(
 }
 
 Recognizer::~Recognizer() = default;
+
+VerifyModel Recognizer::verify_model(std::uint32_t object) const {
+  const DatabaseObject& o = db_.objects[object];
+  return {&o.mesh, o.model_points, db_.params.voxel_m, closed_winding_[object]};
+}
 
 Recognition Recognizer::recognize(const Frame& frame) const {
   const auto start = Clock::now();
@@ -153,7 +159,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
       if (icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
       const Transform T = icp.T_target_source.inverse();
       t0 = Clock::now();
-      const Verification v = verify_pose({&object.mesh, object.model_points, db_.params.voxel_m}, T, frame.depth, frame.K,
+      const Verification v = verify_pose(verify_model(view.object), T, frame.depth, frame.K,
                                          d.cloud.points, verify);
       out.times.verify_ms += ms_since(t0);
       if (!v.accepted || (found && found->score >= v.score)) continue;
@@ -220,7 +226,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
       h.icp_ms = ms_since(t);
       h.T = h.icp.T_target_source.inverse();
       t = Clock::now();
-      h.v = verify_pose({&object->mesh, object->model_points, db_.params.voxel_m}, h.T, frame.depth, frame.K, d.cloud.points,
+      h.v = verify_pose(verify_model(object_index), h.T, frame.depth, frame.K, d.cloud.points,
                         verify);
       h.verify_ms = ms_since(t);
     }

@@ -31,8 +31,8 @@ ProjectedVertex project(const CameraIntrinsics& K, const Eigen::Vector3d& p) {
 // Rasterizes one camera-frame triangle (all vertices in front of the near plane) into the frame.
 class TriangleRasterizer {
  public:
-  TriangleRasterizer(const CameraIntrinsics& K, RenderedFrame& frame, bool normals)
-      : K_(K), frame_(frame), normals_(normals) {}
+  TriangleRasterizer(const CameraIntrinsics& K, RenderedFrame& frame, bool normals, int closed_winding)
+      : K_(K), frame_(frame), normals_(normals), closed_winding_(closed_winding) {}
 
   void draw(const ProjectedVertex& a, const ProjectedVertex& b, const ProjectedVertex& c, std::int32_t instance) {
     const std::array<Eigen::Vector3d, 3> p = {a.p, b.p, c.p};
@@ -40,6 +40,9 @@ class TriangleRasterizer {
     // Twice the signed area in pixels; degenerate (edge-on) triangles cover no pixel centre.
     const double area = (su[1] - su[0]) * (sv[2] - sv[0]) - (sv[1] - sv[0]) * (su[2] - su[0]);
     if (!(std::abs(area) > 1e-12)) return;
+    // Seen from outside, a counter-clockwise face turns clockwise in the image (v runs down), so
+    // its signed area is negative: a face of the other sign shows its back.
+    if (closed_winding_ != 0 && area * closed_winding_ > 0) return;
     const int u0 = std::max(0, static_cast<int>(std::ceil(std::min({su[0], su[1], su[2]}))));
     const int u1 = std::min(K_.width - 1, static_cast<int>(std::floor(std::max({su[0], su[1], su[2]}))));
     const int v0 = std::max(0, static_cast<int>(std::ceil(std::min({sv[0], sv[1], sv[2]}))));
@@ -83,6 +86,7 @@ class TriangleRasterizer {
   const CameraIntrinsics& K_;
   RenderedFrame& frame_;
   bool normals_;
+  int closed_winding_;
 };
 
 // Cuts a triangle at z = near; returns 0, 1 or 2 triangles in front of it (as a fan of `out`).
@@ -107,7 +111,7 @@ RenderedFrame render(std::span<const MeshInstance> instances, const CameraIntrin
   frame.depth = DepthImage(K.width, K.height);
   frame.instance.assign(frame.depth.depth_m.size(), -1);
   if (options.normals) frame.normal.assign(frame.depth.depth_m.size(), Eigen::Vector3f::Zero());
-  TriangleRasterizer raster(K, frame, options.normals);
+  TriangleRasterizer raster(K, frame, options.normals, options.closed_winding);
   std::vector<ProjectedVertex> vertices;  // each vertex transformed and projected once
   for (std::size_t m = 0; m < instances.size(); ++m) {
     const TriangleMesh& mesh = *instances[m].mesh;

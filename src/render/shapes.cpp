@@ -57,14 +57,19 @@ void add_cylinder(TriangleMesh& mesh, double cx, double cy, double radius, doubl
   add_fan(mesh, first + static_cast<std::uint32_t>(segments), segments, {cx, cy, z1}, false);
 }
 
-// A tube of `thickness` radius swept along an arc in the x-z plane around `centre`.
+// A tube of `thickness` radius swept along an arc in the x-z plane around `centre`, its ends
+// closed (so that the whole is a closed surface, whose back faces a renderer may skip).
 void add_arc_tube(TriangleMesh& mesh, const Eigen::Vector3d& centre, double radius, double thickness, double from,
                   double to, int steps) {
+  const auto first = static_cast<std::uint32_t>(mesh.vertices.size());
+  const auto on_arc = [&](double a) { return Eigen::Vector3d(centre + radius * Eigen::Vector3d(std::cos(a), 0, std::sin(a))); };
   add_tube(mesh, steps + 1, 16, [&](int i, int j) {
     const double a = from + (to - from) * i / steps, phi = 2 * kPi * j / 16;
     const Eigen::Vector3d radial(std::cos(a), 0, std::sin(a));
-    return Eigen::Vector3d(centre + radius * radial + thickness * (std::cos(phi) * radial + std::sin(phi) * Eigen::Vector3d::UnitY()));
+    return Eigen::Vector3d(on_arc(a) + thickness * (std::cos(phi) * radial + std::sin(phi) * Eigen::Vector3d::UnitY()));
   });
+  add_fan(mesh, first, 16, on_arc(from), true);
+  add_fan(mesh, first + static_cast<std::uint32_t>(steps * 16), 16, on_arc(to), false);
 }
 
 }  // namespace

@@ -6,6 +6,9 @@
 #include <random>
 
 #include <Eigen/Eigenvalues>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 
 namespace viewpose {
@@ -215,19 +218,38 @@ PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o)
     plane.extent_m = patch_extent;
     out.removed.push_back(std::move(plane));
   }
-  // Every point, not just the sample, is tested against the planes found, in one pass.
-  for (Plane& plane : out.removed) plane.inliers.clear();
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3f& p = cloud.points[i];
-    if (!p.allFinite()) continue;
-    bool on_plane = false;
-    for (Plane& plane : out.removed) {
-      if (std::abs(plane.coefficients.head<3>().dot(p) + plane.coefficients[3]) <= o.distance_threshold_m) {
-        plane.inliers.push_back(static_cast<std::uint32_t>(i));
-        on_plane = true;
+  // Every point, not just the sample, is tested against the planes found: in one pass, split
+  // into contiguous chunks across threads whose results are joined in order.
+  const std::size_t planes = out.removed.size();
+  int chunks = 1;
+#ifdef _OPENMP
+  chunks = omp_get_max_threads();
+#endif
+  std::vector<std::vector<std::vector<std::uint32_t>>> found(static_cast<std::size_t>(chunks),
+                                                             std::vector<std::vector<std::uint32_t>>(planes + 1));
+#pragma omp parallel for schedule(static, 1) num_threads(chunks)
+  for (int chunk = 0; chunk < chunks; ++chunk) {
+    auto& lists = found[static_cast<std::size_t>(chunk)];  // one per plane, then the remaining points
+    const std::size_t begin = cloud.size() * static_cast<std::size_t>(chunk) / static_cast<std::size_t>(chunks),
+                      end = cloud.size() * static_cast<std::size_t>(chunk + 1) / static_cast<std::size_t>(chunks);
+    for (std::size_t i = begin; i < end; ++i) {
+      const Eigen::Vector3f& p = cloud.points[i];
+      if (!p.allFinite()) continue;
+      bool on_plane = false;
+      for (std::size_t k = 0; k < planes; ++k) {
+        const Eigen::Vector4f& c = out.removed[k].coefficients;
+        if (std::abs(c.head<3>().dot(p) + c[3]) <= o.distance_threshold_m) {
+          lists[k].push_back(static_cast<std::uint32_t>(i));
+          on_plane = true;
+        }
       }
+      if (!on_plane) lists[planes].push_back(static_cast<std::uint32_t>(i));
     }
-    if (!on_plane) out.remaining.push_back(static_cast<std::uint32_t>(i));
+  }
+  for (std::size_t k = 0; k <= planes; ++k) {
+    std::vector<std::uint32_t>& all = k < planes ? out.removed[k].inliers : out.remaining;
+    all.clear();
+    for (const auto& lists : found) all.insert(all.end(), lists[k].begin(), lists[k].end());
   }
   return out;
 }

@@ -1,5 +1,6 @@
 #include <cmath>
 #include <numbers>
+#include <string>
 
 #include "test_support.hpp"
 #include "viewpose/render/rasterizer.hpp"
@@ -159,6 +160,50 @@ TEST(Shapes, JugHasTheThesisBottlesProportionsAndAHandle) {
   EXPECT_GT(far, 0.01);  // parts land more than 1 cm from any surface after the turn
   for (const auto& name : shape_names()) EXPECT_GT(make_named_shape(name).triangles.size(), 10u) << name;
   test::expect_error([] { make_named_shape("teapot"); }, "unknown shape 'teapot'");
+}
+
+}  // namespace
+}  // namespace viewpose
+
+namespace viewpose {
+namespace {
+
+TEST(Rasterizer, ClosedMeshesDrawnWithoutBackFacesGiveTheSamePicture) {
+  const Transform T = make_transform(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix(), {0.05, 0.02, 0.8});
+  for (const std::string& name : shape_names()) {
+    SCOPED_TRACE(name);
+    const TriangleMesh mesh = make_named_shape(name);
+    ASSERT_EQ(closed_mesh_winding(mesh), 1) << "the built-in shapes are closed and wound outwards";
+    const RenderedFrame all = render_one(mesh, T);
+    const MeshInstance inst{&mesh, T};
+    RenderOptions culled;
+    culled.closed_winding = 1;
+    const RenderedFrame fronts = render(std::span(&inst, 1), K, culled);
+    ASSERT_GT(all.depth.count_valid(), 1000u);
+    for (std::size_t i = 0; i < all.depth.depth_m.size(); ++i) {
+      const float a = all.depth.depth_m[i], b = fronts.depth.depth_m[i];
+      ASSERT_TRUE(a == b || (std::isnan(a) && std::isnan(b))) << "pixel " << i;
+    }
+    // Wound the other way round, the same faces are the back ones: nothing of the front is drawn.
+    culled.closed_winding = -1;
+    const RenderedFrame backs = render(std::span(&inst, 1), K, culled);
+    std::size_t nearer = 0;
+    for (std::size_t i = 0; i < all.depth.depth_m.size(); ++i) nearer += backs.depth.depth_m[i] <= all.depth.depth_m[i] ? 1 : 0;
+    EXPECT_EQ(nearer, 0u);
+  }
+}
+
+TEST(Rasterizer, OpenOrInconsistentMeshesAreNotClosed) {
+  TriangleMesh open = test::square(1.0f);
+  EXPECT_EQ(closed_mesh_winding(open), 0);
+  TriangleMesh box = make_box_mesh({0.1f, 0.1f, 0.1f});
+  ASSERT_EQ(closed_mesh_winding(box), 1);
+  std::swap(box.triangles[0][1], box.triangles[0][2]);  // one face turned inside out
+  EXPECT_EQ(closed_mesh_winding(box), 0);
+  TriangleMesh inside_out = make_box_mesh({0.1f, 0.1f, 0.1f});
+  for (auto& t : inside_out.triangles) std::swap(t[1], t[2]);
+  EXPECT_EQ(closed_mesh_winding(inside_out), -1);
+  EXPECT_EQ(closed_mesh_winding(TriangleMesh{}), 0);
 }
 
 }  // namespace

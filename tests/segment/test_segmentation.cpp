@@ -297,3 +297,55 @@ TEST(RealData, MosdClustersMatchEveryObjectThatTouchesNoOther) {
 
 }  // namespace
 }  // namespace viewpose
+
+namespace viewpose {
+namespace {
+
+// Clusters by definition: the connected components of "closer than the tolerance", by brute force.
+std::vector<Cluster> brute_force_clusters(const PointCloud& cloud, float tolerance) {
+  const std::size_t n = cloud.size();
+  std::vector<int> label(n, -1);
+  std::vector<Cluster> out;
+  for (std::size_t s = 0; s < n; ++s) {
+    if (label[s] >= 0) continue;
+    Cluster c{static_cast<std::uint32_t>(s)};
+    label[s] = static_cast<int>(out.size());
+    for (std::size_t q = 0; q < c.size(); ++q)
+      for (std::size_t j = 0; j < n; ++j)
+        if (label[j] < 0 && (cloud.points[j] - cloud.points[c[q]]).norm() <= tolerance) {
+          label[j] = label[s];
+          c.push_back(static_cast<std::uint32_t>(j));
+        }
+    std::sort(c.begin(), c.end());
+    out.push_back(c);
+  }
+  return out;
+}
+
+TEST(Clusters, CubeGridGivesExactlyTheTransitiveClosure) {
+  // Random blobs with gaps around the tolerance, so that many pairs of cubes are near misses.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<float> u(-0.15f, 0.15f);
+  std::normal_distribution<float> g(0.0f, 0.012f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int blob = 0; blob < 25; ++blob) {
+    const Eigen::Vector3f centre(u(rng), u(rng), 1.0f + u(rng));
+    for (int k = 0; k < 40; ++k) pts.push_back(centre + Eigen::Vector3f(g(rng), g(rng), g(rng)));
+  }
+  pts.push_back(Eigen::Vector3f::Constant(NAN));
+  const PointCloud cloud = PointCloud::from_points(pts);
+  std::vector<std::uint32_t> all(cloud.size());
+  for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+  ClusterOptions o;
+  o.min_points = 1;
+  std::vector<Cluster> expected = brute_force_clusters(PointCloud::from_points({pts.begin(), pts.end() - 1}), o.tolerance_m);
+  std::vector<Cluster> got = euclidean_clusters(cloud, all, o);
+  ASSERT_GT(expected.size(), 5u);
+  const auto by_first = [](const Cluster& a, const Cluster& b) { return a.front() < b.front(); };
+  std::sort(expected.begin(), expected.end(), by_first);
+  std::sort(got.begin(), got.end(), by_first);
+  EXPECT_EQ(got, expected);
+}
+
+}  // namespace
+}  // namespace viewpose

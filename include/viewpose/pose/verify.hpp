@@ -68,6 +68,7 @@ struct VerifyModel {
   const TriangleMesh* mesh = nullptr;
   std::span<const Eigen::Vector3f> points;  ///< the model cloud (voxel grid of the views), object frame
   float point_spacing_m = 0.003f;
+  int closed_winding = 0;  ///< closed_mesh_winding(*mesh): a closed mesh is drawn without its back faces
 };
 
 Verification verify_pose(const VerifyModel& model, const Transform& T_camera_object, const DepthImage& observed,

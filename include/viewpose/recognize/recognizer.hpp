@@ -111,7 +111,11 @@ class Recognizer {
 
   const ViewDatabase& db_;
   RecognizerOptions options_;
+  // What verification draws of an object.
+  VerifyModel verify_model(std::uint32_t object) const;
+
   std::vector<std::unique_ptr<IcpTarget>> targets_;  // one per object
+  std::vector<int> closed_winding_;  // per object: closed_mesh_winding of its mesh
   double largest_diameter_m_ = 0;
 };
 

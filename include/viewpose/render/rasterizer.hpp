@@ -21,6 +21,9 @@ struct MeshInstance {
 struct RenderOptions {
   double near_m = 0.01;  ///< triangles are clipped at this depth
   bool normals = false;  ///< also return each pixel's surface normal
+  /// Skip the back faces of closed meshes, wound as closed_mesh_winding() says (+1 or -1; 0 draws
+  /// every triangle). The picture is the same, drawn in about half the time. Only for closed meshes.
+  int closed_winding = 0;
 };
 
 struct RenderedFrame {

@@ -1,0 +1,70 @@
+#include <cmath>
+#include <random>
+
+#include "test_support.hpp"
+#include "viewpose/core/error.hpp"
+#include "viewpose/core/kdtree.hpp"
+#include "viewpose/core/nearest_grid.hpp"
+
+namespace viewpose {
+namespace {
+
+// Points on a sphere of 10 cm radius with NaNs among them.
+std::vector<Eigen::Vector3f> sphere_points(std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<float> g(0.0f, 1.0f);
+  std::vector<Eigen::Vector3f> pts;
+  for (std::size_t i = 0; i < n; ++i) pts.push_back(0.1f * Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
+  pts[7] = Eigen::Vector3f::Constant(NAN);
+  return pts;
+}
+
+TEST(NearestGrid, FindsAPointAtMostACellDiagonalFartherThanTheNearest) {
+  const std::vector<Eigen::Vector3f> pts = sphere_points(5000, 1);
+  const float cell = 0.004f, margin = 0.03f;
+  const NearestGrid grid(pts, cell, margin);
+  const KdTree tree(pts);
+  std::mt19937_64 rng(2);
+  std::uniform_real_distribution<float> u(-0.13f, 0.13f);
+  double worst = 0, mean = 0;
+  int compared = 0;
+  for (int q = 0; q < 20000; ++q) {
+    const Eigen::Vector3f p(u(rng), u(rng), u(rng));
+    std::uint32_t exact = 0, found = 0;
+    float d_exact = 0, d_found = 0;
+    ASSERT_TRUE(tree.nearest(p, exact, d_exact));
+    if (!grid.nearest(p, found, d_found)) {
+      // Outside the grid: farther than the margin from the points' bounding box, so from every point.
+      EXPECT_GT(std::sqrt(d_exact), margin - 1e-6f);
+      continue;
+    }
+    ASSERT_NE(found, 7u) << "the NaN point is never returned";
+    EXPECT_FLOAT_EQ(d_found, (pts[found] - p).squaredNorm());
+    const double extra = std::sqrt(d_found) - std::sqrt(d_exact);
+    worst = std::max(worst, extra);
+    mean += extra;
+    ++compared;
+  }
+  ASSERT_GT(compared, 10000);
+  EXPECT_LE(worst, std::sqrt(3.0) * cell + 1e-6);
+  EXPECT_LT(mean / compared, 0.1 * cell);
+}
+
+TEST(NearestGrid, EmptyOrNonFinitePointsFindNothingAndBadSizesThrow) {
+  const std::vector<Eigen::Vector3f> none;
+  std::uint32_t i = 0;
+  float d = 0;
+  EXPECT_FALSE(NearestGrid(none, 0.003f, 0.01f).nearest(Eigen::Vector3f::Zero(), i, d));
+  const std::vector<Eigen::Vector3f> nan(3, Eigen::Vector3f::Constant(NAN));
+  EXPECT_FALSE(NearestGrid(nan, 0.003f, 0.01f).nearest(Eigen::Vector3f::Zero(), i, d));
+  const std::vector<Eigen::Vector3f> one(1, Eigen::Vector3f(1, 2, 3));
+  const NearestGrid grid(one, 0.003f, 0.01f);
+  EXPECT_TRUE(grid.nearest(Eigen::Vector3f(1, 2, 3.005f), i, d));
+  EXPECT_FALSE(grid.nearest(Eigen::Vector3f(NAN, 2, 3), i, d));
+  EXPECT_FALSE(grid.nearest(Eigen::Vector3f(1, 2, 3.5f), i, d));
+  EXPECT_THROW(NearestGrid(one, 0.0f, 0.01f), Error);
+  EXPECT_THROW(NearestGrid(one, 1e-6f, 10.0f), Error) << "a grid of 10^19 cells is refused, not allocated";
+}
+
+}  // namespace
+}  // namespace viewpose
