@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
+#include "viewpose/core/radix_sort.hpp"
 
 namespace viewpose {
 
@@ -67,7 +68,7 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
   const auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
     return (static_cast<std::uint64_t>(x) << 42) | (static_cast<std::uint64_t>(y) << 21) | static_cast<std::uint64_t>(z);
   };
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
+  std::vector<KeyedIndex> keyed;
   keyed.reserve(cloud.size());
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3f& p = cloud.points[i];
@@ -80,7 +81,7 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
     }
     if (inside) keyed.emplace_back(key(c[0], c[1], c[2]), static_cast<std::uint32_t>(i));
   }
-  std::sort(keyed.begin(), keyed.end());
+  radix_sort(keyed);
   std::vector<std::uint64_t> cubes;
   std::vector<std::size_t> first;
   for (std::size_t k = 0; k < keyed.size(); ++k) {

@@ -59,7 +59,7 @@ IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const 
         const double r = n.dot(pd - target.points[k].cast<double>());
         Eigen::Matrix<double, 6, 1> J;
         J << pd.cross(n), n;
-        JtJ.noalias() += J * J.transpose();
+        JtJ.selfadjointView<Eigen::Upper>().rankUpdate(J);  // the upper triangle is all the solver reads
         Jtr.noalias() += J * r;
         sum_r2 += r * r;
         ++count;
@@ -67,14 +67,16 @@ IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const 
       result.fitness = static_cast<double>(count) / static_cast<double>(source.size());
       result.inlier_rmse = count ? std::sqrt(sum_r2 / static_cast<double>(count)) : 0.0;
       if (count < o.min_correspondences) return result;  // lost: not converged
-      const Eigen::Matrix<double, 6, 1> x = JtJ.ldlt().solve(-Jtr);
+      const Eigen::Matrix<double, 6, 1> x = JtJ.selfadjointView<Eigen::Upper>().ldlt().solve(-Jtr);
       if (!x.allFinite()) return result;
       const Eigen::Vector3d omega = x.head<3>(), v = x.tail<3>();
       Transform step = Transform::Identity();
       if (omega.norm() > 0) step.linear() = Eigen::AngleAxisd(omega.norm(), omega.normalized()).toRotationMatrix();
       step.translation() = v;
       result.T_target_source = step * result.T_target_source;
-      if (v.norm() < o.convergence_translation_m && omega.norm() < o.convergence_rotation_rad) {
+      // Earlier stages only bring the pose within reach of the next: they stop at ten times the step.
+      const double coarse = stage + 1 < o.max_correspondence_m.size() ? 10.0 : 1.0;
+      if (v.norm() < coarse * o.convergence_translation_m && omega.norm() < coarse * o.convergence_rotation_rad) {
         converged = true;
         break;
       }

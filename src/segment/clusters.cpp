@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
+#include "viewpose/core/radix_sort.hpp"
 
 namespace viewpose {
 
@@ -32,7 +33,7 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
   const auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
     return (static_cast<std::uint64_t>(x) << 42) | (static_cast<std::uint64_t>(y) << 21) | static_cast<std::uint64_t>(z);
   };
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;  // cube, position in `indices`
+  std::vector<KeyedIndex> keyed;  // cube, position in `indices`
   keyed.reserve(indices.size());
   for (std::size_t k = 0; k < indices.size(); ++k) {
     const Eigen::Vector3f& p = cloud.points[indices[k]];
@@ -45,7 +46,7 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
     }
     if (inside) keyed.emplace_back(key(c[0], c[1], c[2]), static_cast<std::uint32_t>(k));
   }
-  std::sort(keyed.begin(), keyed.end());
+  radix_sort(keyed);
   std::vector<std::uint64_t> cubes;
   std::vector<std::size_t> first;  // into keyed
   for (std::size_t k = 0; k < keyed.size(); ++k) {

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
+#include "viewpose/core/radix_sort.hpp"
 
 namespace viewpose {
 
@@ -15,7 +16,7 @@ PointCloud voxel_downsample(const PointCloud& cloud, float leaf_m) {
   cloud.check_consistent();
   // Voxel coordinates packed into 21 bits each (about +-3 km at 3 mm), sorted to gather each voxel.
   constexpr std::int64_t kOffset = 1 << 20;
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keys;
+  std::vector<KeyedIndex> keys;
   keys.reserve(cloud.size());
   const float inv = 1.0f / leaf_m;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
@@ -30,7 +31,7 @@ PointCloud voxel_downsample(const PointCloud& cloud, float leaf_m) {
     }
     if (inside) keys.emplace_back(key, static_cast<std::uint32_t>(i));
   }
-  std::sort(keys.begin(), keys.end());
+  radix_sort(keys);
   PointCloud out;
   const bool normals = cloud.has_normals(), labels = !cloud.labels.empty(), colours = !cloud.rgba.empty();
   for (std::size_t a = 0; a < keys.size();) {

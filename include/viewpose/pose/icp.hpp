@@ -20,8 +20,8 @@ namespace viewpose {
 struct IcpOptions {
   std::vector<float> max_correspondence_m = {0.04f, 0.02f, 0.01f};  ///< one stage each
   int max_iterations_per_stage = 15;
-  double convergence_translation_m = 1e-4;  ///< a stage ends when a step moves less than this...
-  double convergence_rotation_rad = 1e-4;   ///< ...and turns less than this
+  double convergence_translation_m = 1e-4;  ///< the last stage ends when a step moves less than this...
+  double convergence_rotation_rad = 1e-4;   ///< ...and turns less than this (earlier stages: ten times)
   std::size_t min_correspondences = 12;
   /// At most this many source points take part, evenly spread over the source (0: all). A few
   /// hundred points pin six parameters down as well as thousands; the time is linear in them.

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -5,6 +6,7 @@
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/kdtree.hpp"
 #include "viewpose/core/nearest_grid.hpp"
+#include "viewpose/core/radix_sort.hpp"
 
 namespace viewpose {
 namespace {
@@ -64,6 +66,24 @@ TEST(NearestGrid, EmptyOrNonFinitePointsFindNothingAndBadSizesThrow) {
   EXPECT_FALSE(grid.nearest(Eigen::Vector3f(1, 2, 3.5f), i, d));
   EXPECT_THROW(NearestGrid(one, 0.0f, 0.01f), Error);
   EXPECT_THROW(NearestGrid(one, 1e-6f, 10.0f), Error) << "a grid of 10^19 cells is refused, not allocated";
+}
+
+TEST(RadixSort, EqualsTheComparisonSortIncludingTheOrderOfEqualKeys) {
+  std::mt19937_64 rng(9);
+  for (std::size_t n : {0u, 1u, 63u, 64u, 1000u, 50000u}) {
+    for (int spread : {3, 20, 64}) {  // few distinct keys, some, any 64-bit value
+      SCOPED_TRACE(testing::Message() << n << " keys of " << spread << " bits");
+      std::vector<KeyedIndex> items;
+      for (std::uint32_t i = 0; i < n; ++i) {
+        const std::uint64_t key = spread == 64 ? rng() : (rng() & ((std::uint64_t{1} << spread) - 1)) << 17;
+        items.emplace_back(key, i);
+      }
+      std::vector<KeyedIndex> expected = items;
+      std::sort(expected.begin(), expected.end());
+      radix_sort(items);
+      EXPECT_EQ(items, expected);
+    }
+  }
 }
 
 }  // namespace
