@@ -33,6 +33,7 @@ PointCloud depth_to_cloud(const DepthImage& depth, const CameraIntrinsics& K) {
   // Precomputed per-column and per-row ray slopes: the unprojection is then two multiplies a pixel.
   std::vector<float> x_over_z(static_cast<std::size_t>(depth.width));
   for (int u = 0; u < depth.width; ++u) x_over_z[static_cast<std::size_t>(u)] = static_cast<float>((u - K.cx) / K.fx);
+#pragma omp parallel for schedule(static)
   for (int v = 0; v < depth.height; ++v) {
     const float y_over_z = static_cast<float>((v - K.cy) / K.fy);
     for (int u = 0; u < depth.width; ++u) {
