@@ -15,11 +15,10 @@
 
 namespace viewpose {
 
-Recognizer::Recognizer(const ViewDatabase& db, RecognizerOptions options) : db_(db), options_(std::move(options)) {
+Recognizer::Recognizer(const ViewDatabase& db, RecognizerOptions options) : db_(db), options_(std::move(options)), index_(db) {
   if (db.views.empty()) throw Error("recognize: the view database holds no views");
   for (const DatabaseObject& o : db.objects) {
-    targets_.push_back(std::make_unique<IcpTarget>(o.model_points, o.model_normals));
-    closed_winding_.push_back(closed_mesh_winding(o.mesh));
+    prepared_.push_back(std::make_unique<PreparedObject>());
     largest_diameter_m_ = std::max(largest_diameter_m_, o.diameter_m);
   }
   // Scenes are described at the database's resolution, so that their VFHs are comparable.
@@ -28,9 +27,19 @@ Recognizer::Recognizer(const ViewDatabase& db, RecognizerOptions options) : db_(
 
 Recognizer::~Recognizer() = default;
 
+const Recognizer::PreparedObject& Recognizer::prepared(std::uint32_t object) const {
+  PreparedObject& p = *prepared_[object];
+  std::call_once(p.once, [&] {
+    const DatabaseObject& o = db_.objects[object];
+    p.target = std::make_unique<IcpTarget>(o.model_points, o.model_normals);
+    p.closed_winding = closed_mesh_winding(o.mesh);
+  });
+  return p;
+}
+
 VerifyModel Recognizer::verify_model(std::uint32_t object) const {
   const DatabaseObject& o = db_.objects[object];
-  return {&o.mesh, o.model_points, db_.params.voxel_m, closed_winding_[object]};
+  return {&o.mesh, o.model_points, db_.params.voxel_m, prepared(object).closed_winding};
 }
 
 Recognition Recognizer::recognize(const Frame& frame) const {
@@ -108,7 +117,7 @@ void Recognizer::recognize_rest(const PointCloud& points, Detection detection, c
 std::vector<char> Recognizer::explained_points(const Detection& detection, const PointCloud& points) const {
   std::vector<char> explained(points.size(), 0);
   const Transform T_object_camera = detection.T_camera_object.inverse();
-  const IcpTarget& model = *targets_[detection.object_index];
+  const IcpTarget& model = icp_target(detection.object_index);
   const NearestGrid* grid = options_.icp.grid_cell_m > 0 ? &model.grid(options_.icp.grid_cell_m, options_.icp.reach_m()) : nullptr;
   const float slack = grid ? std::sqrt(3.0f) * options_.icp.grid_cell_m : 0.0f;  // how far off the grid may be
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -137,7 +146,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
   out.times.crh_ms += dt.crh_ms;
   if (d.cloud.size() < 3) return std::nullopt;
   const auto t_match = Clock::now();
-  const std::vector<Match> matches = nearest_views_per_object(db_, d.vfh, options_.matches);
+  const std::vector<Match> matches = index_.nearest(d.vfh, options_.matches, options_.max_matches);
   out.times.match_ms += ms_since(t_match);
   const std::vector<Eigen::Vector3f> icp_source = voxel_downsample(d.cloud, options_.icp_voxel_m).points;
 
@@ -153,7 +162,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
     for (const float roll : rolls) {
       const Transform T0 = crh_alignment(view.centroid.cast<double>(), d.centroid.cast<double>(), roll) * view.T_view_object;
       t0 = Clock::now();
-      const IcpResult icp = icp_point_to_plane(icp_source, *targets_[view.object], T0.inverse(), options_.icp);
+      const IcpResult icp = icp_point_to_plane(icp_source, icp_target(view.object), T0.inverse(), options_.icp);
       out.times.icp_ms += ms_since(t0);
       ++out.hypotheses;
       if (icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
@@ -222,7 +231,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
       const Transform turn = make_transform(R, centre - R * centre);
       Turned& h = turned[static_cast<std::size_t>(axis)];
       auto t = Clock::now();
-      h.icp = icp_point_to_plane(icp_source, *targets_[object_index], (best->T_camera_object * turn).inverse(), options_.icp);
+      h.icp = icp_point_to_plane(icp_source, icp_target(object_index), (best->T_camera_object * turn).inverse(), options_.icp);
       h.icp_ms = ms_since(t);
       h.T = h.icp.T_target_source.inverse();
       t = Clock::now();

@@ -115,3 +115,55 @@ TEST(Matching, ChiSquaredDistance) {
 
 }  // namespace
 }  // namespace viewpose
+
+namespace viewpose {
+namespace {
+
+// A database of `objects` x `views` random sparse histograms, clustered around a few shapes as
+// real views are, with some bins empty in every view (as PCL's f4 bins are).
+ViewDatabase random_histograms(std::size_t objects, std::size_t views, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<Vfh> shapes(8);
+  for (Vfh& h : shapes)
+    for (std::size_t b = 0; b < h.size(); ++b) h[b] = (b >= 135 && b < 180) || u(rng) < 0.6f ? 0.0f : u(rng);
+  ViewDatabase db;
+  db.objects.resize(objects);
+  for (std::size_t o = 0; o < objects; ++o)
+    for (std::size_t v = 0; v < views; ++v) {
+      ViewEntry e;
+      e.object = static_cast<std::uint32_t>(o);
+      const Vfh& shape = shapes[(o + v) % shapes.size()];
+      for (std::size_t b = 0; b < e.vfh.size(); ++b) e.vfh[b] = shape[b] * (0.6f + 0.8f * u(rng));
+      db.views.push_back(e);
+    }
+  return db;
+}
+
+TEST(ViewIndex, GivesExactlyTheExhaustiveSearchesMatches) {
+  const ViewDatabase db = random_histograms(50, 80, 1);
+  const ViewIndex index(db);
+  const ViewDatabase queries = random_histograms(1, 20, 2);
+  for (const ViewEntry& q : queries.views) {
+    // No cut: every object's 20 nearest, as the exhaustive search.
+    const std::vector<Match> all = nearest_views_per_object(db, q.vfh, 20);
+    const std::vector<Match> got = index.nearest(q.vfh, 20);
+    ASSERT_EQ(got.size(), all.size());
+    for (std::size_t k = 0; k < all.size(); ++k) {
+      ASSERT_EQ(got[k].view, all[k].view) << k;
+      ASSERT_EQ(got[k].distance, all[k].distance);
+    }
+    // Cut to the 120 nearest: the exhaustive answer's first 120.
+    const std::vector<Match> cut = index.nearest(q.vfh, 20, 120);
+    ASSERT_EQ(cut.size(), 120u);
+    for (std::size_t k = 0; k < cut.size(); ++k) ASSERT_EQ(cut[k].view, all[k].view) << k;
+    // One view per object: the nearest view of each of the 30 nearest objects.
+    const std::vector<Match> one = index.nearest(q.vfh, 1, 30);
+    const std::vector<Match> one_all = nearest_views_per_object(db, q.vfh, 1);
+    for (std::size_t k = 0; k < one.size(); ++k) ASSERT_EQ(one[k].view, one_all[k].view) << k;
+  }
+  EXPECT_TRUE(ViewIndex(ViewDatabase{}).nearest(queries.views[0].vfh, 20).empty());
+}
+
+}  // namespace
+}  // namespace viewpose

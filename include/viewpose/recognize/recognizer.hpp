@@ -5,10 +5,12 @@
 // Objects that touch share a cluster: once one is found its points are explained away and the rest
 // recognized again, and a cluster nothing explains is split into convex parts (segment/convex_segments).
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "viewpose/database/matching.hpp"
 #include "viewpose/database/view_database.hpp"
 #include "viewpose/describe/crh.hpp"
 #include "viewpose/pose/icp.hpp"
@@ -22,6 +24,9 @@ namespace viewpose {
 struct RecognizerOptions {
   SegmentOptions segment;
   std::size_t matches = 20;      ///< nearest views tried per cluster and object (thesis: 20, one object)
+  /// At most this many views per cluster in all, the nearest (each object at most `matches`): with
+  /// up to six objects every object gets its 20; a database of a thousand gets the 120 nearest.
+  std::size_t max_matches = 120;
   /// CRH peaks: up to 10 rolls per view, down to half the best peak. PCL's 5 and 0.8 missed 1 of 100
   /// frames of the simulated seed experiment (a narrow side view); these found all 100, still
   /// without a false positive (docs/RESULTS.md).
@@ -111,11 +116,20 @@ class Recognizer {
 
   const ViewDatabase& db_;
   RecognizerOptions options_;
+  // What ICP and verification need of an object, made on its first hypothesis: a database of a
+  // thousand objects costs nothing for the objects a scene never suggests.
+  struct PreparedObject {
+    std::once_flag once;
+    std::unique_ptr<IcpTarget> target;
+    int closed_winding = 0;  // closed_mesh_winding of its mesh
+  };
+  const PreparedObject& prepared(std::uint32_t object) const;
+  const IcpTarget& icp_target(std::uint32_t object) const { return *prepared(object).target; }
   // What verification draws of an object.
   VerifyModel verify_model(std::uint32_t object) const;
 
-  std::vector<std::unique_ptr<IcpTarget>> targets_;  // one per object
-  std::vector<int> closed_winding_;  // per object: closed_mesh_winding of its mesh
+  std::vector<std::unique_ptr<PreparedObject>> prepared_;  // one per object
+  ViewIndex index_;
   double largest_diameter_m_ = 0;
 };
 
