@@ -137,6 +137,41 @@ std::vector<char> Recognizer::explained_points(const Detection& detection, const
   return explained;
 }
 
+std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const Transform> T_camera_object_initial,
+                                                               std::uint32_t object,
+                                                               std::span<const Eigen::Vector3f> icp_source,
+                                                               std::span<const Eigen::Vector3f> cluster, const Frame& frame,
+                                                               const VerifyOptions& verify, bool verify_lost,
+                                                               StageTimes& times) const {
+  std::vector<Refined> out(T_camera_object_initial.size());
+  const IcpTarget& target = icp_target(object);
+  const VerifyModel model = verify_model(object);
+  const auto start = Clock::now();
+  const auto n = static_cast<std::ptrdiff_t>(out.size());
+#pragma omp parallel for schedule(dynamic, 1) if (options_.parallel_hypotheses && n > 1)
+  for (std::ptrdiff_t k = 0; k < n; ++k) {
+    Refined& h = out[static_cast<std::size_t>(k)];
+    auto t = Clock::now();
+    h.icp = icp_point_to_plane(icp_source, target, T_camera_object_initial[static_cast<std::size_t>(k)].inverse(), options_.icp);
+    h.icp_ms = ms_since(t);
+    h.T_camera_object = h.icp.T_target_source.inverse();
+    if (!verify_lost && h.icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
+    t = Clock::now();
+    h.v = verify_pose(model, h.T_camera_object, frame.depth, frame.K, cluster, verify);
+    h.verify_ms = ms_since(t);
+    h.verified = true;
+  }
+  // The wall time, shared between the two stages as their summed times are.
+  const double wall = ms_since(start);
+  double icp = 0, verified = 0;
+  for (const Refined& h : out) icp += h.icp_ms, verified += h.verify_ms;
+  if (icp + verified > 0) {
+    times.icp_ms += wall * icp / (icp + verified);
+    times.verify_ms += wall * verified / (icp + verified);
+  }
+  return out;
+}
+
 std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points, const Frame& frame,
                                                        const VerifyOptions& verify, Recognition& out) const {
   DescribeTimes dt;
@@ -156,34 +191,32 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
     std::optional<Detection> found;
     const ViewEntry& view = db_.views[matches[rank].view];
     const DatabaseObject& object = db_.objects[view.object];
-    auto t0 = Clock::now();
+    const auto t0 = Clock::now();
     const std::vector<float> rolls = crh_roll_angles(view.crh, d.crh, options_.roll);
     out.times.crh_ms += ms_since(t0);
+    std::vector<Transform> initial;
     for (const float roll : rolls) {
-      const Transform T0 = crh_alignment(view.centroid.cast<double>(), d.centroid.cast<double>(), roll) * view.T_view_object;
-      t0 = Clock::now();
-      const IcpResult icp = icp_point_to_plane(icp_source, icp_target(view.object), T0.inverse(), options_.icp);
-      out.times.icp_ms += ms_since(t0);
+      initial.push_back(crh_alignment(view.centroid.cast<double>(), d.centroid.cast<double>(), roll) * view.T_view_object);
+    }
+    // All rolls at once on the threads there are; then taken in order, as one after the other would.
+    const std::vector<Refined> refined = refine_and_verify(initial, view.object, icp_source, d.cloud.points, frame, verify,
+                                                           /*verify_lost=*/false, out.times);
+    for (std::size_t k = 0; k < refined.size(); ++k) {
+      const Refined& h = refined[k];
       ++out.hypotheses;
-      if (icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
-      const Transform T = icp.T_target_source.inverse();
-      t0 = Clock::now();
-      const Verification v = verify_pose(verify_model(view.object), T, frame.depth, frame.K,
-                                         d.cloud.points, verify);
-      out.times.verify_ms += ms_since(t0);
-      if (!v.accepted || (found && found->score >= v.score)) continue;
+      if (!h.verified || !h.v.accepted || (found && found->score >= h.v.score)) continue;
       Detection det;
       det.object_id = object.id;
       det.object_name = object.name;
       det.object_index = view.object;
-      det.T_camera_object = T;
-      det.score = v.score;
-      det.icp_fitness = icp.fitness;
-      det.icp_rmse_m = icp.inlier_rmse;
+      det.T_camera_object = h.T_camera_object;
+      det.score = h.v.score;
+      det.icp_fitness = h.icp.fitness;
+      det.icp_rmse_m = h.icp.inlier_rmse;
       det.match_rank = static_cast<int>(rank);
-      det.roll_deg = roll;
+      det.roll_deg = rolls[k];
       det.cluster_points = d.cloud.size();
-      det.verification = v;
+      det.verification = h.v;
       found = det;
       if (!options_.keep_best) break;
     }
@@ -214,45 +247,22 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
     const DatabaseObject* object = &db_.objects[object_index];
     const BoundingBox box = bounding_box(object->model_points);
     const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
-    // The three turns are independent: refined and verified in parallel, then weighed in order, so
-    // that the outcome does not depend on the number of threads.
-    struct Turned {
-      IcpResult icp;
-      Transform T = Transform::Identity();
-      Verification v;
-      double icp_ms = 0, verify_ms = 0;
-    };
-    std::array<Turned, 3> turned;
-    const auto t_block = Clock::now();
-#pragma omp parallel for schedule(static, 1) if (options_.parallel_hypotheses)
+    std::vector<Transform> initial;
     for (int axis = 0; axis < 3; ++axis) {
       // Half a turn about the axis through the box centre, in the object frame.
       const Eigen::Matrix3d R = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
-      const Transform turn = make_transform(R, centre - R * centre);
-      Turned& h = turned[static_cast<std::size_t>(axis)];
-      auto t = Clock::now();
-      h.icp = icp_point_to_plane(icp_source, icp_target(object_index), (best->T_camera_object * turn).inverse(), options_.icp);
-      h.icp_ms = ms_since(t);
-      h.T = h.icp.T_target_source.inverse();
-      t = Clock::now();
-      h.v = verify_pose(verify_model(object_index), h.T, frame.depth, frame.K, d.cloud.points,
-                        verify);
-      h.verify_ms = ms_since(t);
+      initial.push_back(best->T_camera_object * make_transform(R, centre - R * centre));
     }
-    // Wall time, shared between the two stages as their summed times are.
-    const double wall = ms_since(t_block);
-    double icp_sum = 0, verify_sum = 0;
-    for (const Turned& h : turned) icp_sum += h.icp_ms, verify_sum += h.verify_ms;
-    out.times.icp_ms += icp_sum + verify_sum > 0 ? wall * icp_sum / (icp_sum + verify_sum) : 0;
-    out.times.verify_ms += icp_sum + verify_sum > 0 ? wall * verify_sum / (icp_sum + verify_sum) : 0;
+    const std::vector<Refined> turned = refine_and_verify(initial, object_index, icp_source, d.cloud.points, frame, verify,
+                                                          /*verify_lost=*/true, out.times);
     out.hypotheses += turned.size();
     Detection chosen = *best;
     double runner_up = 0;
-    for (const Turned& h : turned) {
+    for (const Refined& h : turned) {
       if (!h.v.accepted) continue;
       if (h.v.score > chosen.score) {
         runner_up = std::max(runner_up, chosen.score);
-        chosen.T_camera_object = h.T;
+        chosen.T_camera_object = h.T_camera_object;
         chosen.score = h.v.score;
         chosen.icp_fitness = h.icp.fitness;
         chosen.icp_rmse_m = h.icp.inlier_rmse;

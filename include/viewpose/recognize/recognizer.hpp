@@ -7,6 +7,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -42,8 +43,8 @@ struct RecognizerOptions {
   /// verified in turn) and keep the best: objects that are nearly symmetric (a jug whose handle is a
   /// small share of its surface) otherwise come out the wrong way round about as often as not.
   bool try_half_turns = true;
-  /// Refine and verify independent hypotheses (the half turns) on several threads. The result is
-  /// the same either way.
+  /// Refine and verify independent hypotheses (a view's CRH rolls, the half turns) on several
+  /// threads, taken in order afterwards: the result is the same either way.
   bool parallel_hypotheses = true;
   /// Report a symmetric object's pose in one canonical form among its equivalent ones (rotation
   /// nearest the camera's axes), so that a box or a can does not flip from frame to frame.
@@ -116,6 +117,20 @@ class Recognizer {
 
   const ViewDatabase& db_;
   RecognizerOptions options_;
+  // One initial pose refined by ICP and, unless ICP lost the object (or verify_lost), verified.
+  struct Refined {
+    IcpResult icp;
+    Transform T_camera_object = Transform::Identity();
+    Verification v;
+    bool verified = false;
+    double icp_ms = 0, verify_ms = 0;
+  };
+  // Each initial pose of `object`, refined and verified, in parallel when allowed; the results in
+  // the order given, so that what is made of them does not depend on the threads.
+  std::vector<Refined> refine_and_verify(std::span<const Transform> T_camera_object_initial, std::uint32_t object,
+                                         std::span<const Eigen::Vector3f> icp_source, std::span<const Eigen::Vector3f> cluster,
+                                         const Frame& frame, const VerifyOptions& verify, bool verify_lost,
+                                         StageTimes& times) const;
   // What ICP and verification need of an object, made on its first hypothesis: a database of a
   // thousand objects costs nothing for the objects a scene never suggests.
   struct PreparedObject {

@@ -1,0 +1,165 @@
+// Each stage of recognition alone, on fixed inputs: a simulated Kinect VGA frame of the jug on a
+// table at 1 m, the jug's 80-view database, and a thousand-object database for matching.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <random>
+
+#include "viewpose/database/matching.hpp"
+#include "viewpose/describe/crh.hpp"
+#include "viewpose/describe/describe.hpp"
+#include "viewpose/pose/icp.hpp"
+#include "viewpose/pose/verify.hpp"
+#include "viewpose/recognize/recognizer.hpp"
+#include "viewpose/render/shapes.hpp"
+#include "viewpose/segment/segmentation.hpp"
+#include "viewpose/segment/voxel_grid.hpp"
+#include "viewpose/simulate/scaled_database.hpp"
+#include "viewpose/simulate/scene.hpp"
+
+namespace {
+
+using namespace viewpose;
+
+// Everything the stages take, made once.
+struct Inputs {
+  ObjectModel jug{1, "jug", make_jug()};
+  ViewDatabase db;
+  DepthImage depth;
+  CameraIntrinsics K = CameraIntrinsics::kinect_v1();
+  Frame frame;
+  PointCloud cluster;  // the jug's cluster, voxelized
+  Description description;
+  std::vector<Eigen::Vector3f> icp_source;
+  Transform T_model_cluster_initial = Transform::Identity();  // the nearest view's first CRH roll
+  Transform T_camera_object = Transform::Identity();          // the refined pose
+
+  Inputs() {
+    db = build_view_database(std::span(&jug, 1), DatabaseParams{});
+    SeedExperimentOptions setup;
+    setup.distances_m = {1.0};
+    setup.orientations = 4;
+    const SimDataset scenes = make_seed_experiment(jug, K, setup, 7);
+    depth = simulate_image(scenes, scenes.scenes[0].images[1], SensorModel::kinect_v1(), 1).depth;
+    frame = frame_from_depth(depth, K);
+    SegmentOptions so;
+    so.voxel_m = db.params.voxel_m;
+    const Segmentation seg = segment_scene(frame.cloud, so);
+    cluster = cluster_points(seg.points, seg.clusters.at(0));
+    description = describe(cluster, db.params.describe);
+    icp_source = voxel_downsample(description.cloud, 0.005f).points;
+    const Match m = nearest_views(db, description.vfh, 1).at(0);
+    const ViewEntry& view = db.views[m.view];
+    const float roll = crh_roll_angles(view.crh, description.crh, RollOptions{10, 0.2f, 0.5f}).at(0);
+    T_model_cluster_initial =
+        (crh_alignment(view.centroid.cast<double>(), description.centroid.cast<double>(), roll) * view.T_view_object).inverse();
+    const IcpTarget target(db.objects[0].model_points, db.objects[0].model_normals);
+    T_camera_object = icp_point_to_plane(icp_source, target, T_model_cluster_initial).T_target_source.inverse();
+  }
+};
+
+const Inputs& inputs() {
+  static const Inputs in;
+  return in;
+}
+
+void BM_FrameFromDepth(benchmark::State& state) {
+  const Inputs& in = inputs();
+  for (auto _ : state) benchmark::DoNotOptimize(frame_from_depth(in.depth, in.K));
+}
+BENCHMARK(BM_FrameFromDepth)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_SegmentFrame(benchmark::State& state) {
+  const Inputs& in = inputs();
+  for (auto _ : state) benchmark::DoNotOptimize(segment_scene(in.frame.cloud));
+}
+BENCHMARK(BM_SegmentFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The general path: the same points in random order, as an unorganized cloud from a file.
+void BM_SegmentUnorganizedCloud(benchmark::State& state) {
+  const Inputs& in = inputs();
+  std::vector<Eigen::Vector3f> points = in.frame.cloud.points;
+  std::shuffle(points.begin(), points.end(), std::mt19937_64(1));
+  const PointCloud shuffled = PointCloud::from_points(points);
+  for (auto _ : state) benchmark::DoNotOptimize(segment_scene(shuffled));
+}
+BENCHMARK(BM_SegmentUnorganizedCloud)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_NormalsOfCluster(benchmark::State& state) {
+  const Inputs& in = inputs();
+  state.SetLabel(std::to_string(in.cluster.size()) + " points");
+  for (auto _ : state) {
+    PointCloud c = PointCloud::from_points(in.cluster.points);
+    estimate_normals(c, in.db.params.describe.normals);
+    benchmark::DoNotOptimize(c.normals.data());
+  }
+}
+BENCHMARK(BM_NormalsOfCluster)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_VfhAndCrh(benchmark::State& state) {
+  const Inputs& in = inputs();
+  const PointCloud& c = in.description.cloud;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(compute_vfh(c.points, c.normals, in.db.params.describe.vfh));
+    benchmark::DoNotOptimize(compute_crh(c.normals, in.description.centroid));
+  }
+}
+BENCHMARK(BM_VfhAndCrh)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Matching one cluster against 1000 objects x 80 views: through the index, and exhaustively.
+const ViewDatabase& thousand_objects() {
+  static const ViewDatabase db = scaled_database(inputs().db, 1000, 3);
+  return db;
+}
+
+void BM_Match1000Objects(benchmark::State& state) {
+  const ViewIndex index(thousand_objects());
+  state.SetLabel(std::to_string(index.views()) + " views");
+  for (auto _ : state) benchmark::DoNotOptimize(index.nearest(inputs().description.vfh, 20, 120));
+}
+BENCHMARK(BM_Match1000Objects)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Match1000ObjectsExhaustive(benchmark::State& state) {
+  for (auto _ : state) benchmark::DoNotOptimize(nearest_views_per_object(thousand_objects(), inputs().description.vfh, 20));
+}
+BENCHMARK(BM_Match1000ObjectsExhaustive)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_IcpOneHypothesis(benchmark::State& state) {
+  const Inputs& in = inputs();
+  const IcpTarget target(in.db.objects[0].model_points, in.db.objects[0].model_normals);
+  icp_point_to_plane(in.icp_source, target, in.T_model_cluster_initial);  // builds the grid
+  for (auto _ : state) benchmark::DoNotOptimize(icp_point_to_plane(in.icp_source, target, in.T_model_cluster_initial));
+}
+BENCHMARK(BM_IcpOneHypothesis)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_VerifyOneHypothesis(benchmark::State& state) {
+  const Inputs& in = inputs();
+  const DatabaseObject& o = in.db.objects[0];
+  const VerifyModel model{&o.mesh, o.model_points, in.db.params.voxel_m, closed_mesh_winding(o.mesh)};
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(verify_pose(model, in.T_camera_object, in.frame.depth, in.K, in.description.cloud.points));
+  }
+}
+BENCHMARK(BM_VerifyOneHypothesis)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_RecognizeFrame(benchmark::State& state) {
+  const Inputs& in = inputs();
+  const Recognizer recognizer(in.db);
+  recognizer.recognize(in.frame);  // the first hypothesis builds the object's grid
+  for (auto _ : state) benchmark::DoNotOptimize(recognizer.recognize(frame_from_depth(in.depth, in.K)));
+}
+BENCHMARK(BM_RecognizeFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_BuildDatabaseJug80Views(benchmark::State& state) {
+  const Inputs& in = inputs();
+  for (auto _ : state) benchmark::DoNotOptimize(build_view_database(std::span(&in.jug, 1), DatabaseParams{}));
+}
+BENCHMARK(BM_BuildDatabaseJug80Views)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_NearestGridOfJug(benchmark::State& state) {
+  const Inputs& in = inputs();
+  for (auto _ : state) benchmark::DoNotOptimize(NearestGrid(in.db.objects[0].model_points, 0.003f, 0.04f));
+}
+BENCHMARK(BM_NearestGridOfJug)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
