@@ -24,6 +24,7 @@
 #include "viewpose/io/file.hpp"
 #include "viewpose/recognize/recognizer.hpp"
 #include "viewpose/render/shapes.hpp"
+#include "viewpose/simulate/scaled_database.hpp"
 #include "viewpose/simulate/scene.hpp"
 
 namespace viewpose::cli {
@@ -76,7 +77,7 @@ double peak_rss_mib() {
 void add_bench_command(CLI::App& app, int& exit_code) {
   struct Options {
     std::string dataset, split = "test", models_dir = "models", db, json;
-    int frames = 100, threads = 0;
+    int frames = 100, threads = 0, objects = 1;
     bool no_split = false;
   };
   auto o = std::make_shared<Options>();
@@ -92,6 +93,11 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--db", o->db, "View database (required with --dataset; default: built from the jug in this run)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--threads", o->threads, "Threads (default: every core)")->check(CLI::Range(1, 256));
+  cmd->add_option("--objects", o->objects,
+                  "Grow the database to this many objects: copies of its own with reshaped histograms, to measure "
+                  "matching and memory at scale (a detection of a copy counts as the original)")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
   cmd->add_flag("--no-split", o->no_split, "Do not split clusters in which nothing is found");
   cmd->add_option("--json", o->json, "Also write the numbers as JSON to this file");
   cmd->callback([o, &exit_code] {
@@ -120,6 +126,11 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       source = fmt::format("{} ({}, {} images)", o->dataset, o->split, n);
     }
     if (frames.empty()) throw Error("bench: no frames to run");
+    const std::size_t originals = db.objects.size();
+    if (o->objects > 1) {
+      fmt::print(stderr, "growing the database to {} objects...\n", o->objects);
+      db = scaled_database(db, static_cast<std::size_t>(o->objects), 11);
+    }
     RecognizerOptions options;
     options.split_touching = !o->no_split;
     const Recognizer recognizer(db, options);
@@ -151,9 +162,10 @@ void add_bench_command(CLI::App& app, int& exit_code) {
         std::vector<char> paired(frames[i].gt.size(), 0);
         for (const Detection& d : r.detections) {
           const DatabaseObject& object = db.objects[d.object_index];
+          const int original_id = db.objects[d.object_index % originals].id;  // copies follow their originals
           bool right = false;
           for (std::size_t g = 0; g < frames[i].gt.size() && !right; ++g) {
-            if (paired[g] || frames[i].gt[g].obj_id != d.object_id) continue;
+            if (paired[g] || frames[i].gt[g].obj_id != original_id) continue;
             right = add_s_error(d.T_camera_object, frames[i].gt[g].T_camera_object, object.model_points) <
                     0.1 * object.diameter_m;
             if (right) {

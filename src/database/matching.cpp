@@ -1,8 +1,11 @@
 #include "viewpose/database/matching.hpp"
 
 #include <algorithm>
-#include <limits>
+#include <cmath>
 #include <span>
+#include <tuple>
+
+#include <Eigen/Eigenvalues>
 
 namespace viewpose {
 
@@ -63,69 +66,51 @@ std::vector<Match> capped(std::vector<Match> all, std::span<const std::uint32_t>
 
 }  // namespace
 
-ViewIndex::ViewIndex(const ViewDatabase& db) : db_(&db) {
-  const std::size_t n = db.views.size(), groups = (Vfh{}.size() + kGroup - 1) / kGroup;
+ViewIndex::ViewIndex(const ViewDatabase& db, std::size_t candidates) : db_(&db), candidates_(candidates) {
+  const std::size_t n = db.views.size();
   objects_.reserve(n);
   for (const ViewEntry& v : db.views) objects_.push_back(v.object);
-  for (std::size_t g = 0; g < groups; ++g) {
-    std::vector<float> row(n, 0.0f);
-    bool any = false;
-    for (std::size_t v = 0; v < n; ++v) {
-      for (std::size_t b = g * kGroup; b < std::min(Vfh{}.size(), (g + 1) * kGroup); ++b) row[v] += db.views[v].vfh[b];
-      any = any || row[v] != 0.0f;
-    }
-    if (!any) continue;  // no view has mass here: the query's own mass there is the same for all
-    active_.push_back(g);
-    coarse_.insert(coarse_.end(), row.begin(), row.end());
+  if (n <= candidates_) return;  // small: exhaustive and exact
+  constexpr Eigen::Index kBins = std::tuple_size_v<Vfh>;
+  const auto root = [](const Vfh& h) {
+    Eigen::Matrix<float, kBins, 1> r;
+    for (Eigen::Index b = 0; b < kBins; ++b) r[b] = std::sqrt(std::max(0.0f, h[static_cast<std::size_t>(b)]));
+    return r;
+  };
+  // Principal directions from an even sample of at most 4000 views.
+  const std::size_t sample = std::min<std::size_t>(n, 4000);
+  Eigen::MatrixXd X(kBins, static_cast<Eigen::Index>(sample));
+  for (std::size_t k = 0; k < sample; ++k) X.col(static_cast<Eigen::Index>(k)) = root(db.views[k * n / sample].vfh).cast<double>();
+  const Eigen::VectorXd mean = X.rowwise().mean();
+  X.colwise() -= mean;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(X * X.transpose());
+  directions_ = eig.eigenvectors().rightCols(kDirections).transpose().cast<float>();  // largest eigenvalues last
+  mean_ = mean.cast<float>();
+  coordinates_.resize(static_cast<std::size_t>(kDirections) * n);
+  for (std::size_t v = 0; v < n; ++v) {
+    Eigen::Map<Eigen::Matrix<float, kDirections, 1>>(coordinates_.data() + v * kDirections) = directions_ * (root(db.views[v].vfh) - mean_);
   }
 }
 
 std::vector<Match> ViewIndex::nearest(const Vfh& query, std::size_t per_object, std::size_t total) const {
   const std::size_t n = objects_.size();
   if (n == 0 || per_object == 0) return {};
-  // Lower bounds: the coarse distance, summed bin by bin over all views (a loop that vectorizes).
-  std::vector<float> bound(n, 0.0f);
-  float constant = 0;  // the query's mass in coarse bins where every view is empty
-  std::size_t next_active = 0;
-  for (std::size_t g = 0; g * kGroup < query.size(); ++g) {
-    float q = 0;
-    for (std::size_t b = g * kGroup; b < std::min(query.size(), (g + 1) * kGroup); ++b) q += query[b];
-    if (next_active == active_.size() || active_[next_active] != g) {
-      constant += q;
-      continue;
-    }
-    const float* row = coarse_.data() + next_active * n;
-    ++next_active;
-    for (std::size_t v = 0; v < n; ++v) {
-      const float d = q - row[v], s = q + row[v];
-      bound[v] += d * d / std::max(s, 1e-30f);  // s = 0 only where d = 0
-    }
-  }
-  // A first batch, the views of smallest bound, compared in full: its cut distance is an upper
-  // bound on the final one. Then every view whose bound is below it is compared in full too.
-  const std::size_t batch = std::min(n, std::max<std::size_t>(4 * (total > 0 ? total : per_object), 64));
-  std::vector<std::uint32_t> order(n);
-  for (std::uint32_t v = 0; v < n; ++v) order[v] = v;
-  std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(batch - 1), order.end(),
-                   [&](std::uint32_t a, std::uint32_t b) { return bound[a] < bound[b] || (bound[a] == bound[b] && a < b); });
-  std::vector<char> done(n, 0);
   std::vector<Match> compared;
-  for (std::size_t k = 0; k < batch; ++k) {
-    compared.push_back({order[k], chi_squared(query, db_->views[order[k]].vfh)});
-    done[order[k]] = 1;
+  if (exhaustive()) {
+    for (std::uint32_t v = 0; v < n; ++v) compared.push_back({v, chi_squared(query, db_->views[v].vfh)});
+    return capped(std::move(compared), objects_, db_->objects.size(), per_object, total);
   }
-  const std::size_t objects = db_->objects.size();
-  const std::vector<Match> first = capped(compared, objects_, objects, per_object, total);
-  // Fewer than `total` found (few objects, or no cut): every view may still belong in.
-  const bool full = total > 0 && first.size() >= total;
-  const float cut = full ? first.back().distance : std::numeric_limits<float>::infinity();
-  // The bound is summed in another order than the full distance: allow for rounding.
-  const float slack = 1e-4f * cut + 1e-6f;
+  Eigen::Matrix<float, Eigen::Dynamic, 1> r(mean_.size());
+  for (Eigen::Index b = 0; b < r.size(); ++b) r[b] = std::sqrt(std::max(0.0f, query[static_cast<std::size_t>(b)]));
+  const Eigen::Matrix<float, kDirections, 1> q = directions_ * (r - mean_);
+  std::vector<std::pair<float, std::uint32_t>> near(n);
   for (std::uint32_t v = 0; v < n; ++v) {
-    if (done[v] || bound[v] + constant > cut + slack) continue;
-    compared.push_back({v, chi_squared(query, db_->views[v].vfh)});
+    near[v] = {(Eigen::Map<const Eigen::Matrix<float, kDirections, 1>>(coordinates_.data() + std::size_t{v} * kDirections) - q).squaredNorm(), v};
   }
-  return capped(std::move(compared), objects_, objects, per_object, total);
+  const std::size_t keep = std::min(n, std::max(candidates_, 8 * std::max(total, per_object)));
+  std::nth_element(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(keep - 1), near.end());
+  for (std::size_t k = 0; k < keep; ++k) compared.push_back({near[k].second, chi_squared(query, db_->views[near[k].second].vfh)});
+  return capped(std::move(compared), objects_, db_->objects.size(), per_object, total);
 }
 
 }  // namespace viewpose

@@ -1,5 +1,6 @@
 #include "viewpose/simulate/scaled_database.hpp"
 
+#include <cmath>
 #include <random>
 
 #include <fmt/format.h>
@@ -11,7 +12,7 @@ ViewDatabase scaled_database(const ViewDatabase& db, std::size_t objects, std::u
   out.params = db.params;
   if (db.objects.empty()) return out;
   std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<float> factor(0.7f, 1.3f);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (std::size_t o = 0; o < objects; ++o) {
     const std::size_t source = o % db.objects.size();
     DatabaseObject object = db.objects[source];
@@ -25,7 +26,13 @@ ViewDatabase scaled_database(const ViewDatabase& db, std::size_t objects, std::u
       copy.T_view_object = v.T_view_object;
       copy.vfh = v.vfh;
       if (o >= db.objects.size()) {
-        for (float& bin : copy.vfh) bin *= factor(rng);
+        // A smooth wave across the bins (another object's histograms differ in their broad shape,
+        // not bin by bin only) times bin-by-bin noise.
+        const double amplitude = 0.3 + 0.4 * unit(rng), period = 20 + 60 * unit(rng), phase = 2 * M_PI * unit(rng);
+        for (std::size_t b = 0; b < copy.vfh.size(); ++b) {
+          const double wave = 1 + amplitude * std::sin(2 * M_PI * static_cast<double>(b) / period + phase);
+          copy.vfh[b] = static_cast<float>(copy.vfh[b] * wave * (0.85 + 0.3 * unit(rng)));
+        }
       }
       copy.crh = v.crh;
       copy.centroid = v.centroid;
