@@ -1,8 +1,9 @@
 #include "viewpose/core/nearest_grid.hpp"
 
-#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <new>
 
 #include <fmt/format.h>
 
@@ -10,7 +11,10 @@
 
 namespace viewpose {
 
-NearestGrid::NearestGrid(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m) : points_(points) {
+void NearestGrid::FreeDeleter::operator()(void* p) const { std::free(p); }
+
+NearestGrid::NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> points, float cell_m, float margin_m)
+    : tree_(&tree), points_(points) {
   if (!(cell_m > 0) || !(margin_m >= 0)) throw Error(fmt::format("nearest grid: cell {} and margin {} must be positive", cell_m, margin_m));
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
   for (const Eigen::Vector3f& p : points) {
@@ -18,8 +22,9 @@ NearestGrid::NearestGrid(std::span<const Eigen::Vector3f> points, float cell_m, 
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
-  if (!(lo.x() <= hi.x())) return;  // no finite point: every query finds nothing
+  if (!(lo.x() <= hi.x()) || tree.size() == 0) return;  // no finite point: every query finds nothing
   origin_ = lo - Eigen::Vector3f::Constant(margin_m);
+  cell_ = cell_m;
   inv_cell_ = 1.0f / cell_m;
   const Eigen::Vector3f size = (hi - lo + Eigen::Vector3f::Constant(2 * margin_m)) * inv_cell_;
   const double cells = (std::floor(size.x()) + 1.0) * (std::floor(size.y()) + 1.0) * (std::floor(size.z()) + 1.0);
@@ -27,61 +32,45 @@ NearestGrid::NearestGrid(std::span<const Eigen::Vector3f> points, float cell_m, 
   nx_ = static_cast<std::uint32_t>(size.x()) + 1;
   ny_ = static_cast<std::uint32_t>(size.y()) + 1;
   nz_ = static_cast<std::uint32_t>(size.z()) + 1;
-  cells_.assign(static_cast<std::size_t>(nx_) * ny_ * nz_, kEmpty);
-  const auto at = [&](int x, int y, int z) { return (static_cast<std::size_t>(z) * ny_ + static_cast<std::size_t>(y)) * nx_ + static_cast<std::size_t>(x); };
-  const auto centre = [&](int x, int y, int z) {
-    return Eigen::Vector3f(origin_.x() + (static_cast<float>(x) + 0.5f) * cell_m, origin_.y() + (static_cast<float>(y) + 0.5f) * cell_m,
-                           origin_.z() + (static_cast<float>(z) + 0.5f) * cell_m);
-  };
-  // Each cell's squared distance from its centre to the point it holds.
-  std::vector<float> held(cells_.size(), std::numeric_limits<float>::infinity());
-  // Seeds: each point in its own cell, the one nearest the centre winning.
-  for (std::uint32_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3f& p = points[i];
-    if (!p.allFinite()) continue;
-    const Eigen::Vector3f c = (p - origin_) * inv_cell_;
-    const int x = std::min(static_cast<int>(c.x()), static_cast<int>(nx_) - 1), y = std::min(static_cast<int>(c.y()), static_cast<int>(ny_) - 1),
-              z = std::min(static_cast<int>(c.z()), static_cast<int>(nz_) - 1);
-    const std::size_t cell = at(x, y, z);
-    const float d2 = (p - centre(x, y, z)).squaredNorm();
-    if (d2 < held[cell]) {
-      cells_[cell] = i;
-      held[cell] = d2;
-    }
+  // calloc: zero pages on demand. std::atomic<uint32_t> of all-zero bytes is the value 0.
+  static_assert(std::atomic<std::uint32_t>::is_always_lock_free && sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t));
+  void* memory = std::calloc(static_cast<std::size_t>(cells), sizeof(std::atomic<std::uint32_t>));
+  if (!memory) throw std::bad_alloc();
+  cells_.reset(static_cast<std::atomic<std::uint32_t>*>(memory));
+}
+
+void NearestGrid::fill_all() const {
+  if (!cells_) return;
+  const auto slices = static_cast<std::ptrdiff_t>(nz_);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::ptrdiff_t z = 0; z < slices; ++z) {
+    std::uint32_t index = 0;
+    float d2 = 0;
+    for (std::uint32_t y = 0; y < ny_; ++y)
+      for (std::uint32_t x = 0; x < nx_; ++x) {
+        const Eigen::Vector3f centre = origin_ + (Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)) +
+                                                  Eigen::Vector3f::Constant(0.5f)) * cell_;
+        nearest(centre, index, d2);
+      }
   }
-  // Vector propagation (Danielsson): a forward raster pass taking the best of the 13 neighbours
-  // already visited, then a backward pass over the other 13; each cell ends with the point nearest
-  // its centre among those its neighbours hold (nearly always the nearest of all).
-  const int X = static_cast<int>(nx_), Y = static_cast<int>(ny_), Z = static_cast<int>(nz_);
-  const auto improve = [&](int x, int y, int z, int dx, int dy, int dz) {
-    const int xx = x + dx, yy = y + dy, zz = z + dz;
-    if (xx < 0 || yy < 0 || zz < 0 || xx >= X || yy >= Y || zz >= Z) return;
-    const std::uint32_t candidate = cells_[at(xx, yy, zz)];
-    if (candidate == kEmpty) return;
-    const std::size_t cell = at(x, y, z);
-    if (cells_[cell] == candidate) return;
-    const float d2 = (points[candidate] - centre(x, y, z)).squaredNorm();
-    if (d2 < held[cell]) {
-      cells_[cell] = candidate;
-      held[cell] = d2;
-    }
-  };
-  {
-    for (int z = 0; z < Z; ++z)
-      for (int y = 0; y < Y; ++y)
-        for (int x = 0; x < X; ++x)
-          for (int dz = -1; dz <= 0; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-              for (int dx = -1; dx <= 1; ++dx)
-                if (dz < 0 || dy < 0 || (dy == 0 && dx < 0)) improve(x, y, z, dx, dy, dz);
-    for (int z = Z - 1; z >= 0; --z)
-      for (int y = Y - 1; y >= 0; --y)
-        for (int x = X - 1; x >= 0; --x)
-          for (int dz = 0; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-              for (int dx = -1; dx <= 1; ++dx)
-                if (dz > 0 || dy > 0 || (dy == 0 && dx > 0)) improve(x, y, z, dx, dy, dz);
-  }
+}
+
+std::uint32_t NearestGrid::fill(std::atomic<std::uint32_t>& cell, std::uint32_t x, std::uint32_t y, std::uint32_t z) const {
+  const Eigen::Vector3f centre =
+      origin_ + (Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)) + Eigen::Vector3f::Constant(0.5f)) * cell_;
+  std::uint32_t found = 0;
+  float unused = 0;
+  tree_->nearest(centre, found, unused);
+  cell.store(found + 1, std::memory_order_relaxed);
+  return found + 1;
+}
+
+std::size_t NearestGrid::filled() const {
+  std::size_t n = 0;
+  if (!cells_) return n;
+  const std::size_t all = static_cast<std::size_t>(nx_) * ny_ * nz_;
+  for (std::size_t i = 0; i < all; ++i) n += cells_[i].load(std::memory_order_relaxed) != 0 ? 1 : 0;
+  return n;
 }
 
 }  // namespace viewpose

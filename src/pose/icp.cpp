@@ -12,7 +12,7 @@ IcpTarget::IcpTarget(std::vector<Eigen::Vector3f> p, std::vector<Eigen::Vector3f
     : points(std::move(p)), normals(std::move(n)), tree(points) {}
 
 const NearestGrid& IcpTarget::grid(float cell_m, float margin_m) const {
-  std::call_once(grid_once_, [&] { grid_ = std::make_unique<NearestGrid>(points, cell_m, margin_m); });
+  std::call_once(grid_once_, [&] { grid_ = std::make_unique<NearestGrid>(tree, points, cell_m, margin_m); });
   return *grid_;
 }
 
@@ -38,6 +38,7 @@ IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const 
     const float max_d = o.max_correspondence_m[stage];
     const float max_d2 = max_d * max_d;
     bool converged = false;
+    double previous_rmse = -1;
     for (int it = 0; it < o.max_iterations_per_stage; ++it) {
       ++result.iterations;
       // Gauss-Newton on r = n . (T s - q), with T perturbed by a small twist (omega, v) on the left.
@@ -67,6 +68,13 @@ IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const 
       result.fitness = static_cast<double>(count) / static_cast<double>(source.size());
       result.inlier_rmse = count ? std::sqrt(sum_r2 / static_cast<double>(count)) : 0.0;
       if (count < o.min_correspondences) return result;  // lost: not converged
+      // The same fit as the step before: the correspondences have settled (or flip between two
+      // equally good sets, which a grid's cells can make them do); another step changes nothing.
+      if (previous_rmse >= 0 && std::abs(result.inlier_rmse - previous_rmse) <= o.convergence_relative_rmse * previous_rmse) {
+        converged = true;
+        break;
+      }
+      previous_rmse = result.inlier_rmse;
       const Eigen::Matrix<double, 6, 1> x = JtJ.selfadjointView<Eigen::Upper>().ldlt().solve(-Jtr);
       if (!x.allFinite()) return result;
       const Eigen::Vector3d omega = x.head<3>(), v = x.tail<3>();

@@ -21,6 +21,11 @@ Recognizer::Recognizer(const ViewDatabase& db, RecognizerOptions options) : db_(
     prepared_.push_back(std::make_unique<PreparedObject>());
     largest_diameter_m_ = std::max(largest_diameter_m_, o.diameter_m);
   }
+  if (db.objects.size() <= options_.prepare_objects_up_to) {
+    for (std::uint32_t o = 0; o < db.objects.size() && options_.icp.grid_cell_m > 0; ++o) {
+      icp_target(o).grid(options_.icp.grid_cell_m, options_.icp.reach_m()).fill_all();
+    }
+  }
   // Scenes are described at the database's resolution, so that their VFHs are comparable.
   options_.segment.voxel_m = db.params.voxel_m;
 }
@@ -254,7 +259,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
       initial.push_back(best->T_camera_object * make_transform(R, centre - R * centre));
     }
     const std::vector<Refined> turned = refine_and_verify(initial, object_index, icp_source, d.cloud.points, frame, verify,
-                                                          /*verify_lost=*/true, out.times);
+                                                          /*verify_lost=*/false, out.times);
     out.hypotheses += turned.size();
     Detection chosen = *best;
     double runner_up = 0;

@@ -57,11 +57,12 @@ class TriangleRasterizer {
     // Edge functions e_i(u, v) = A_i u + B_i v + C_i, positive inside for a counter-clockwise
     // triangle; divided by the area they are the barycentric weights of the opposite vertex.
     std::array<double, 3> A, B, C;
+    const double inv_area = 1.0 / area;  // one division a triangle: most cover a few pixels only
     for (int i = 0; i < 3; ++i) {
       const int j = (i + 1) % 3, k = (i + 2) % 3;
-      A[i] = (sv[j] - sv[k]) / area;
-      B[i] = (su[k] - su[j]) / area;
-      C[i] = (su[j] * sv[k] - su[k] * sv[j]) / area;
+      A[i] = (sv[j] - sv[k]) * inv_area;
+      B[i] = (su[k] - su[j]) * inv_area;
+      C[i] = (su[j] * sv[k] - su[k] * sv[j]) * inv_area;
     }
     const double eps = -1e-9;  // pixel centres on an edge belong to both triangles: no cracks
     for (int v = v0; v <= v1; ++v) {

@@ -24,8 +24,9 @@ std::vector<Eigen::Vector3f> sphere_points(std::size_t n, std::uint64_t seed) {
 TEST(NearestGrid, FindsAPointAtMostACellDiagonalFartherThanTheNearest) {
   const std::vector<Eigen::Vector3f> pts = sphere_points(5000, 1);
   const float cell = 0.004f, margin = 0.03f;
-  const NearestGrid grid(pts, cell, margin);
   const KdTree tree(pts);
+  const NearestGrid grid(tree, pts, cell, margin);
+  EXPECT_EQ(grid.filled(), 0u) << "cells fill on first use";
   std::mt19937_64 rng(2);
   std::uniform_real_distribution<float> u(-0.13f, 0.13f);
   double worst = 0, mean = 0;
@@ -49,6 +50,7 @@ TEST(NearestGrid, FindsAPointAtMostACellDiagonalFartherThanTheNearest) {
   }
   ASSERT_GT(compared, 10000);
   EXPECT_LE(worst, std::sqrt(3.0) * cell + 1e-6);
+  EXPECT_GT(grid.filled(), 1000u);
   EXPECT_LT(mean / compared, 0.1 * cell);
 }
 
@@ -56,16 +58,19 @@ TEST(NearestGrid, EmptyOrNonFinitePointsFindNothingAndBadSizesThrow) {
   const std::vector<Eigen::Vector3f> none;
   std::uint32_t i = 0;
   float d = 0;
-  EXPECT_FALSE(NearestGrid(none, 0.003f, 0.01f).nearest(Eigen::Vector3f::Zero(), i, d));
+  const KdTree no_tree(none);
+  EXPECT_FALSE(NearestGrid(no_tree, none, 0.003f, 0.01f).nearest(Eigen::Vector3f::Zero(), i, d));
   const std::vector<Eigen::Vector3f> nan(3, Eigen::Vector3f::Constant(NAN));
-  EXPECT_FALSE(NearestGrid(nan, 0.003f, 0.01f).nearest(Eigen::Vector3f::Zero(), i, d));
+  const KdTree nan_tree(nan);
+  EXPECT_FALSE(NearestGrid(nan_tree, nan, 0.003f, 0.01f).nearest(Eigen::Vector3f::Zero(), i, d));
   const std::vector<Eigen::Vector3f> one(1, Eigen::Vector3f(1, 2, 3));
-  const NearestGrid grid(one, 0.003f, 0.01f);
+  const KdTree one_tree(one);
+  const NearestGrid grid(one_tree, one, 0.003f, 0.01f);
   EXPECT_TRUE(grid.nearest(Eigen::Vector3f(1, 2, 3.005f), i, d));
   EXPECT_FALSE(grid.nearest(Eigen::Vector3f(NAN, 2, 3), i, d));
   EXPECT_FALSE(grid.nearest(Eigen::Vector3f(1, 2, 3.5f), i, d));
-  EXPECT_THROW(NearestGrid(one, 0.0f, 0.01f), Error);
-  EXPECT_THROW(NearestGrid(one, 1e-6f, 10.0f), Error) << "a grid of 10^19 cells is refused, not allocated";
+  EXPECT_THROW(NearestGrid(one_tree, one, 0.0f, 0.01f), Error);
+  EXPECT_THROW(NearestGrid(one_tree, one, 1e-6f, 10.0f), Error) << "a grid of 10^19 cells is refused, not allocated";
 }
 
 TEST(RadixSort, EqualsTheComparisonSortIncludingTheOrderOfEqualKeys) {

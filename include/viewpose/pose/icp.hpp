@@ -21,7 +21,8 @@ struct IcpOptions {
   std::vector<float> max_correspondence_m = {0.04f, 0.02f, 0.01f};  ///< one stage each
   int max_iterations_per_stage = 15;
   double convergence_translation_m = 1e-4;  ///< the last stage ends when a step moves less than this...
-  double convergence_rotation_rad = 1e-4;   ///< ...and turns less than this (earlier stages: ten times)
+  double convergence_rotation_rad = 1e-4;   ///< ...and turns less than this (earlier stages: ten times),
+  double convergence_relative_rmse = 1e-3;  ///< ...or the residual stays within this share of the last
   std::size_t min_correspondences = 12;
   /// At most this many source points take part, evenly spread over the source (0: all). A few
   /// hundred points pin six parameters down as well as thousands; the time is linear in them.
@@ -49,9 +50,8 @@ struct IcpResult {
   bool converged = false;  ///< the last stage converged with enough correspondences
 };
 
-/// A model surface ready for ICP: points, normals, their k-d tree, and a nearest-point grid built
-/// on first use (tens of milliseconds and a few megabytes per object, so only objects that are
-/// tried pay for it). Safe to share between threads.
+/// A model surface ready for ICP: points, normals, their k-d tree, and a nearest-point grid whose
+/// cells fill as ICP asks for them. Safe to share between threads.
 struct IcpTarget {
   IcpTarget(std::vector<Eigen::Vector3f> points, std::vector<Eigen::Vector3f> normals);
   std::vector<Eigen::Vector3f> points;

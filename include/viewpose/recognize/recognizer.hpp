@@ -43,6 +43,11 @@ struct RecognizerOptions {
   /// verified in turn) and keep the best: objects that are nearly symmetric (a jug whose handle is a
   /// small share of its surface) otherwise come out the wrong way round about as often as not.
   bool try_half_turns = true;
+  /// Databases of at most this many objects are prepared for ICP when the recognizer is made (about
+  /// 0.1 s an object), so that the first frames run as fast as the rest; larger ones object by
+  /// object as scenes suggest them (the first hypotheses of an object then cost a few milliseconds
+  /// more while its nearest-point grid fills). Either way the results are the same.
+  std::size_t prepare_objects_up_to = 16;
   /// Refine and verify independent hypotheses (a view's CRH rolls, the half turns) on several
   /// threads, taken in order afterwards: the result is the same either way.
   bool parallel_hypotheses = true;
