@@ -5,15 +5,17 @@
 #   make test-sanitize  the same suite under AddressSanitizer + UndefinedBehaviorSanitizer
 #   make fuzz           build the libFuzzer targets (clang) and run each for FUZZ_SECONDS
 #   make check          all three, as CI runs them
-#   make bench          micro-benchmarks of each stage
+#   make bench          micro-benchmarks of each stage, then the pipeline over 100 frames
+#   make bench-pcl      install PCL, and time the thesis's PCL pipeline beside ours, stage by stage
 #   make results        the thesis's experiment and the real-data check; writes docs/RESULTS.md
 #   make pcl-fixtures   install PCL, and regenerate tests/fixtures/pcl from PCL's own code
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 FUZZ_SECONDS ?= 60
+PCL_FRAMES ?= 12
 BUILD := build
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-sanitize fuzz check bench results pcl-fixtures clean
+.PHONY: all deps build demo test test-sanitize fuzz check bench bench-pcl results pcl-fixtures clean
 
 all: build
 
@@ -45,6 +47,13 @@ check: test test-sanitize fuzz
 
 bench: build
 	@./$(BUILD)/viewpose_bench
+	@./$(BUILD)/viewpose bench --frames 100
+
+bench-pcl: deps
+	@scripts/install-deps.sh pcl
+	@cmake -S . -B build-pcl-bench -DCMAKE_BUILD_TYPE=Release -DVIEWPOSE_PCL_BENCH=ON -DVIEWPOSE_TESTS=OFF -DVIEWPOSE_BENCH=OFF >/dev/null
+	@cmake --build build-pcl-bench -j $(JOBS) --target viewpose_pcl_bench
+	@./build-pcl-bench/viewpose_pcl_bench --frames $(PCL_FRAMES)
 
 # The thesis's experiment and the real-data check, end to end: writes docs/RESULTS.md and its plots.
 results: build
@@ -60,4 +69,4 @@ pcl-fixtures: build
 	@./build-pcl/pcl_reference tests/fixtures/jug_view.pcd tests/fixtures/pcl
 
 clean:
-	rm -rf build build-sanitize build-fuzz build-pcl demo-out
+	rm -rf build build-sanitize build-fuzz build-pcl build-pcl-bench demo-out
