@@ -142,7 +142,8 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       std::vector<double> ms;
     };
     std::vector<Series> stages = {{"frame", {}}, {"downsample", {}}, {"segment", {}}, {"normals", {}}, {"vfh", {}},
-                                  {"match", {}}, {"crh", {}},        {"icp", {}},     {"verify", {}},  {"total", {}}};
+                                  {"match", {}}, {"crh", {}},        {"icp", {}},     {"verify", {}},  {"split", {}},
+                                  {"total", {}}};
     std::vector<double> hypotheses, per_hypothesis_ms;
     std::size_t targets = 0, found = 0, found_add = 0, wrong = 0;
     {
@@ -155,7 +156,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
         const Recognition r = recognizer.recognize(frame);
         const StageTimes& t = r.times;
         const double values[] = {frame_ms, t.downsample_ms, t.segment_ms, t.normals_ms, t.vfh_ms, t.match_ms,
-                                 t.crh_ms,   t.icp_ms,        t.verify_ms,  t.total_ms + frame_ms};
+                                 t.crh_ms,   t.icp_ms,        t.verify_ms,  t.split_ms,     t.total_ms + frame_ms};
         for (std::size_t s = 0; s < stages.size(); ++s) stages[s].ms.push_back(values[s]);
         hypotheses.push_back(static_cast<double>(r.hypotheses));
         if (r.hypotheses > 0) per_hypothesis_ms.push_back((t.icp_ms + t.verify_ms) / static_cast<double>(r.hypotheses));

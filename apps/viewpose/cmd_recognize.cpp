@@ -76,7 +76,7 @@ nlohmann::json to_json(const Recognition& r) {
   return {{"detections", dets}, {"clusters", r.clusters}, {"split_clusters", r.split_clusters}, {"hypotheses", r.hypotheses},
           {"times_ms", {{"downsample", t.downsample_ms}, {"segment", t.segment_ms}, {"normals", t.normals_ms},
                         {"vfh", t.vfh_ms}, {"match", t.match_ms}, {"crh", t.crh_ms}, {"icp", t.icp_ms},
-                        {"verify", t.verify_ms}, {"total", t.total_ms}}}};
+                        {"verify", t.verify_ms}, {"split", t.split_ms}, {"total", t.total_ms}}}};
 }
 
 }  // namespace
@@ -93,8 +93,8 @@ void print_recognition(const Recognition& r) {
   }
   const StageTimes& s = r.times;
   fmt::print("time {:.1f} ms: downsample {:.1f}, segment {:.1f}, normals {:.1f}, vfh {:.1f}, match {:.1f}, crh {:.1f}, "
-             "icp {:.1f}, verify {:.1f}\n", s.total_ms, s.downsample_ms, s.segment_ms, s.normals_ms, s.vfh_ms, s.match_ms,
-             s.crh_ms, s.icp_ms, s.verify_ms);
+             "icp {:.1f}, verify {:.1f}, split {:.1f}\n", s.total_ms, s.downsample_ms, s.segment_ms, s.normals_ms, s.vfh_ms,
+             s.match_ms, s.crh_ms, s.icp_ms, s.verify_ms, s.split_ms);
 }
 
 void add_recognize_command(CLI::App& app, int& exit_code) {

@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <exception>
 #include <map>
 #include <string>
@@ -39,8 +40,10 @@
 #include <pcl/segmentation/sac_segmentation.h>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "viewpose/database/matching.hpp"
+#include "viewpose/io/file.hpp"
 #include "viewpose/recognize/recognizer.hpp"
 #include "viewpose/render/shapes.hpp"
 #include "viewpose/segment/voxel_grid.hpp"
@@ -262,12 +265,14 @@ PclTimes run_pcl(const Frame& frame, const ViewDatabase& db, const Cloud::Ptr& m
 
 int main(int argc, char** argv) {
   int frames = 8, hypotheses = 10;
+  std::string json_path;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--frames") frames = std::max(1, std::atoi(argv[i + 1]));
     else if (flag == "--hypotheses") hypotheses = std::max(1, std::atoi(argv[i + 1]));
+    else if (flag == "--json") json_path = argv[i + 1];
     else {
-      std::fprintf(stderr, "usage: viewpose_pcl_bench [--frames N] [--hypotheses N]\n");
+      std::fprintf(stderr, "usage: viewpose_pcl_bench [--frames N] [--hypotheses N] [--json FILE]\n");
       return 2;
     }
   }
@@ -320,10 +325,20 @@ int main(int argc, char** argv) {
   fmt::print("{} frames of the seed experiment (0.75-1.50 m), VGA; PCL {} hypotheses a frame, viewpose {:.0f} (median)\n",
              done, median(pcl_hyp), median(ours_hyp));
   fmt::print("{:<28} {:>12} {:>12} {:>9}\n", "stage (median ms)", "PCL 1.13", "viewpose", "ratio");
+  nlohmann::json stages = nlohmann::json::array();
   for (const char* stage : {"segmentation", "normals", "describe (VFH, CRH, roll)", "match", "ICP per hypothesis",
                             "verify per hypothesis", "whole frame"}) {
     const double a = median(pcl_ms[stage]), b = median(ours_ms[stage]);
     fmt::print("{:<28} {:>12.2f} {:>12.3f} {:>8.0f}x\n", stage, a, b, b > 0 ? a / b : 0.0);
+    stages.push_back({{"stage", stage}, {"pcl_ms", a}, {"viewpose_ms", b}, {"ratio", b > 0 ? a / b : 0.0}});
+  }
+  if (!json_path.empty()) {
+    char date[32];
+    const std::time_t now = std::time(nullptr);
+    std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
+    const nlohmann::json j = {{"date", date}, {"frames", done}, {"pcl_hypotheses_per_frame", median(pcl_hyp)},
+                              {"viewpose_hypotheses_per_frame", median(ours_hyp)}, {"stages", stages}};
+    write_file_atomic(json_path, j.dump(2) + "\n");
   }
   return 0;
 }

@@ -83,7 +83,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   }
   auto t = Clock::now();
   const std::vector<Cluster> parts = convex_segments(points, options_.split);
-  out.times.segment_ms += ms_since(t);
+  out.times.split_ms += ms_since(t);
   // One part that is nearly the whole region has been tried already.
   if (parts.empty() || (parts.size() == 1 && parts[0].size() > 0.9 * static_cast<double>(points.size()))) return;
   ++out.split_clusters;
@@ -113,7 +113,7 @@ void Recognizer::recognize_rest(const PointCloud& points, Detection detection, c
       if (!explained[i]) rest.push_back(i);
     }
     rest_clusters = euclidean_clusters(points, rest, options_.segment.clusters);
-    out.times.segment_ms += ms_since(t);
+    out.times.split_ms += ms_since(t);
   }
   out.detections.push_back(std::move(detection));
   for (const Cluster& c : rest_clusters) recognize_region(cluster_points(points, c), frame, out, depth + 1);

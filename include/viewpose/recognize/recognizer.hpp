@@ -91,6 +91,9 @@ struct Detection {
 struct StageTimes {
   double downsample_ms = 0, segment_ms = 0, normals_ms = 0, vfh_ms = 0, match_ms = 0, crh_ms = 0, icp_ms = 0,
          verify_ms = 0, total_ms = 0;
+  /// Taking a detection's points out of its cluster and clustering the rest again, and splitting
+  /// clusters nothing was found in (touching objects).
+  double split_ms = 0;
 };
 
 struct Recognition {
