@@ -46,14 +46,15 @@ struct NeighbourSums {
 // Normal (towards the viewpoint) and curvature of the plane whose scatter matrix is `cov`.
 void plane_of_covariance(const Eigen::Matrix3d& cov, const Eigen::Vector3f& point, const Eigen::Vector3f& viewpoint,
                          Eigen::Vector3f& normal, float& curvature) {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  eig.computeDirect(cov);  // eigenvalues in increasing order
-  const Eigen::Vector3d l = eig.eigenvalues();
-  Eigen::Vector3f n = eig.eigenvectors().col(0).cast<float>();
+  // Single precision, as PCL's own 3x3 solver: the sums it comes from are single precision.
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> eig;
+  eig.computeDirect(cov.cast<float>());  // eigenvalues in increasing order
+  const Eigen::Vector3f l = eig.eigenvalues();
+  Eigen::Vector3f n = eig.eigenvectors().col(0);
   if (n.dot(viewpoint - point) < 0) n = -n;
   normal = n;
-  const double sum = l.sum();
-  curvature = sum > 0 ? static_cast<float>(std::max(0.0, l[0]) / sum) : 0.0f;
+  const float sum = l.sum();
+  curvature = sum > 0 ? std::max(0.0f, l[0]) / sum : 0.0f;
 }
 
 // Plane through the neighbours of point i; writes its normal and curvature.

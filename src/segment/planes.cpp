@@ -192,11 +192,32 @@ PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o)
   // Planes are searched for among `pool`, an even sample of the cloud's finite points; a plane that
   // is not large is left in the cloud but taken out of the pool, so that a smaller wall behind it
   // can still be found.
-  const std::size_t stride = o.max_sample_points > 0 ? std::max<std::size_t>(1, cloud.size() / o.max_sample_points) : 1;
   std::vector<std::uint32_t> pool;
-  pool.reserve(cloud.size() / stride + 1);
-  for (std::size_t i = 0; i < cloud.size(); i += stride) {
-    if (cloud.points[i].allFinite()) pool.push_back(static_cast<std::uint32_t>(i));
+  if (cloud.organized() && o.max_sample_points > 0) {
+    // An image: every s-th pixel of every s-th row, a square lattice. (Every k-th pixel in raster
+    // order is not: when k divides the width it samples whole columns and nothing between them,
+    // and the plane's patch falls apart into strips.)
+    const auto s = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(cloud.size()) / static_cast<double>(o.max_sample_points))));
+    for (int v = s / 2; v < cloud.height; v += s)
+      for (int u = s / 2; u < cloud.width; u += s) {
+        const auto i = static_cast<std::uint32_t>(v * cloud.width + u);
+        if (cloud.points[i].allFinite()) pool.push_back(i);
+      }
+  } else if (o.max_sample_points > 0 && cloud.size() > o.max_sample_points) {
+    // Any other cloud: points drawn at random (seeded), as a file's order may be a grid of its own
+    // that a fixed stride would alias with.
+    std::mt19937_64 rng(o.seed);
+    std::uniform_int_distribution<std::size_t> pick(0, cloud.size() - 1);
+    for (std::size_t k = 0; k < o.max_sample_points; ++k) {
+      const std::size_t i = pick(rng);
+      if (cloud.points[i].allFinite()) pool.push_back(static_cast<std::uint32_t>(i));
+    }
+    std::sort(pool.begin(), pool.end());
+    pool.erase(std::unique(pool.begin(), pool.end()), pool.end());
+  } else {
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if (cloud.points[i].allFinite()) pool.push_back(static_cast<std::uint32_t>(i));
+    }
   }
   PlaneOptions round = o;
   // Cells of the inlier band's width: neighbouring cells link points up to about 2.8 cells apart.

@@ -20,12 +20,13 @@ struct PlaneOptions {
   float distance_threshold_m = 0.01f;  ///< inlier band (thesis: about 1 cm)
   int max_iterations = 500;            ///< RANSAC samples at most (stops earlier at 99 % confidence)
   /// Planes whose largest connected patch covers less than this stay (0.01 m2: 1000 points of a
-  /// 3 mm voxel grid). Measured in cells of the inlier band's width, so it does not depend on how
-  /// densely the cloud samples the plane.
+  /// 3 mm voxel grid). Counted in cells of the inlier band's width that hold a sampled point: where
+  /// the sample is sparser than the cells it counts less than the true area, never more.
   float min_area_m2 = 0.01f;
   float min_extent_m = 0.30f;          ///< planes narrower than this in either direction (object faces) stay
-  /// Planes are searched for among at most this many points, evenly spread over the cloud: enough
-  /// to sample a table at 3 m at under a cell apart.
+  /// Planes are searched for among at most this many points, evenly spread over the cloud (a
+  /// square lattice of pixels for an organized one: every third pixel of every third row of a VGA
+  /// frame, 1 cm apart at 1.7 m).
   std::size_t max_sample_points = 40000;
   int max_planes = 5;
   std::uint64_t seed = 1;
