@@ -73,7 +73,7 @@ nlohmann::json to_json(const Recognition& r) {
                                       {"unmeasured_fraction", d.verification.unmeasured_fraction}}}});
   }
   const StageTimes& t = r.times;
-  return {{"detections", dets}, {"clusters", r.clusters}, {"split_clusters", r.split_clusters}, {"hypotheses", r.hypotheses},
+  return {{"detections", dets}, {"clusters", r.clusters}, {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses},
           {"times_ms", {{"downsample", t.downsample_ms}, {"segment", t.segment_ms}, {"normals", t.normals_ms},
                         {"vfh", t.vfh_ms}, {"match", t.match_ms}, {"crh", t.crh_ms}, {"icp", t.icp_ms},
                         {"verify", t.verify_ms}, {"split", t.split_ms}, {"total", t.total_ms}}}};

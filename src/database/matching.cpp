@@ -104,12 +104,20 @@ std::vector<Match> ViewIndex::nearest(const Vfh& query, std::size_t per_object, 
   for (Eigen::Index b = 0; b < r.size(); ++b) r[b] = std::sqrt(std::max(0.0f, query[static_cast<std::size_t>(b)]));
   const Eigen::Matrix<float, kDirections, 1> q = directions_ * (r - mean_);
   std::vector<std::pair<float, std::uint32_t>> near(n);
-  for (std::uint32_t v = 0; v < n; ++v) {
-    near[v] = {(Eigen::Map<const Eigen::Matrix<float, kDirections, 1>>(coordinates_.data() + std::size_t{v} * kDirections) - q).squaredNorm(), v};
+  const auto views = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for schedule(static) if (n > 20000)
+  for (std::ptrdiff_t v = 0; v < views; ++v) {
+    const auto coordinates = Eigen::Map<const Eigen::Matrix<float, kDirections, 1>>(coordinates_.data() + static_cast<std::size_t>(v) * kDirections);
+    near[static_cast<std::size_t>(v)] = {(coordinates - q).squaredNorm(), static_cast<std::uint32_t>(v)};
   }
   const std::size_t keep = std::min(n, std::max(candidates_, 8 * std::max(total, per_object)));
   std::nth_element(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(keep - 1), near.end());
-  for (std::size_t k = 0; k < keep; ++k) compared.push_back({near[k].second, chi_squared(query, db_->views[near[k].second].vfh)});
+  compared.resize(keep);
+#pragma omp parallel for schedule(static) if (keep > 500)
+  for (std::ptrdiff_t k = 0; k < static_cast<std::ptrdiff_t>(keep); ++k) {
+    const std::uint32_t v = near[static_cast<std::size_t>(k)].second;
+    compared[static_cast<std::size_t>(k)] = {v, chi_squared(query, db_->views[v].vfh)};
+  }
   return capped(std::move(compared), objects_, db_->objects.size(), per_object, total);
 }
 

@@ -185,6 +185,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
   out.times.vfh_ms += dt.vfh_ms;
   out.times.crh_ms += dt.crh_ms;
   if (d.cloud.size() < 3) return std::nullopt;
+  ++out.regions;
   const auto t_match = Clock::now();
   const std::vector<Match> matches = index_.nearest(d.vfh, options_.matches, options_.max_matches);
   out.times.match_ms += ms_since(t_match);

@@ -102,6 +102,7 @@ struct Recognition {
   std::size_t clusters = 0;
   std::size_t hypotheses = 0;  ///< poses refined and verified
   std::size_t split_clusters = 0;  ///< clusters in which nothing passed, tried again in convex parts
+  std::size_t regions = 0;  ///< clusters, parts and remainders described and matched against the database
 };
 
 class Recognizer {
