@@ -205,9 +205,9 @@ def real_data(viewpose, shared, work, log):
 def speed_runs(viewpose, work, log):
     """viewpose bench: 100 seed frames on every core and on one, and against a thousand objects."""
     out = {}
-    for name, extra in [("all cores", []), ("one thread", ["--threads", 1]), ("1000 objects", ["--objects", 1000])]:
-        path = work / f"bench_{name.replace(' ', '_')}.json"
-        frames = 30 if name == "1000 objects" else 100
+    for name, frames, extra in [("all cores", 100, []), ("one thread", 100, ["--threads", 1]),
+                                ("1000 objects", 30, ["--objects", 1000]), ("1000 objects, one frame", 1, ["--objects", 1000])]:
+        path = work / f"bench_{name.replace(' ', '_').replace(',', '')}.json"
         run(viewpose, "bench", "--frames", frames, *extra, "--json", path, log=log)
         out[name] = json.loads(path.read_text())
     pcl = ROOT / "docs" / "results" / "pcl_side_by_side.json"
@@ -232,11 +232,14 @@ def write_speed(w, speed):
     w(f"\n{a['fps']:.0f} frames per second on {a['threads']} threads ({one['fps']:.0f} on one); {a['hypotheses_median']:.0f} hypotheses "
       f"per frame (median), ICP and verification {a['icp_verify_per_hypothesis_ms']:.2f} ms of wall time per hypothesis. "
       f"Making the recognizer (filling the ICP grid): {a['prepare_ms']:.0f} ms. Peak memory {a['peak_rss_mib']:.0f} MiB.\n")
-    w(f"Against a thousand objects (`--objects 1000`: the jug and 999 copies with reshaped histograms, {big['views']} views): "
-      f"matching {big['stages_ms']['match']['median']:.2f} ms a frame (median), peak memory {big['peak_rss_mib']:.0f} MiB, "
-      f"poses right {big['right']} of {big['targets']} (a copy counts as the jug), whole frame "
-      f"{big['stages_ms']['total']['median']:.0f} ms (median): the copies are jugs too, so each passes and is weighed as a "
-      "challenger, which real distinct objects would not.\n")
+    single = speed["1000 objects, one frame"]
+    w(f"Against a thousand objects (`--objects 1000`: the jug and 999 copies with reshaped histograms, {big['views']} views; "
+      f"{big['frames']} frames): matching {big['match_per_cluster_ms']:.2f} ms per cluster (median); peak memory "
+      f"{single['peak_rss_mib']:.0f} MiB for one frame, {big['peak_rss_mib']:.0f} MiB after {big['frames']} (each object's "
+      f"ICP data is made the first time a scene suggests it); poses right {big['right']} of {big['targets']} (a copy counts "
+      f"as the jug), whole frame {big['stages_ms']['total']['median']:.0f} ms (median). The copies are near-duplicates: "
+      "the 120 nearest views are mostly copies seen from elsewhere, which costs recall and time, and each copy that "
+      "passes is weighed as a challenger. A thousand distinct objects would crowd each other less.\n")
     ratios = {}
     if pcl:
         w(f"### Beside PCL 1.13 (`make bench-pcl`, {pcl['frames']} frames, {pcl.get('date', '')})\n")
@@ -260,7 +263,8 @@ def write_speed(w, speed):
     row("segmentation (voxel grid, planes, clusters) <= 3 ms", f"{seg:.2f} ms (median)", seg <= 3)
     row("normals <= 1.5 ms", f"{st['normals']['median']:.2f} ms (median)", st["normals"]["median"] <= 1.5)
     row("ICP + verification <= 3 ms per hypothesis", f"{a['icp_verify_per_hypothesis_ms']:.2f} ms", a["icp_verify_per_hypothesis_ms"] <= 3)
-    row("matching <= 2 ms per cluster against 80,000 views", f"{big['stages_ms']['match']['median']:.2f} ms a frame", big["stages_ms"]["match"]["median"] <= 2)
+    row("matching <= 2 ms per cluster against 80,000 views", f"{big['match_per_cluster_ms']:.2f} ms", big["match_per_cluster_ms"] <= 2)
+    row("peak memory reported, a VGA frame against 1000 objects", f"{single['peak_rss_mib']:.0f} MiB", True)
     row("database build <= 1 s per object (80 views)", f"{a['db_build_ms'] / 1000:.2f} s", a["db_build_ms"] <= 1000)
     if pcl:
         row(">= 100 x faster than PCL, whole frame", f"{ratios['whole frame']:.0f}x", ratios["whole frame"] >= 100)
