@@ -225,7 +225,7 @@ def write_speed(w, speed):
     w(f"round (ADD) {a['right_add']}, wrong detections {a['wrong']}.\n")
     w("| stage | median | p90 | p95 | max | one thread: median | p95 |")
     w("|---|---|---|---|---|---|---|")
-    for name in st:
+    for name in ["frame", "segment", "downsample", "normals", "vfh", "crh", "match", "icp", "verify", "split", "total"]:
         o = one["stages_ms"][name]
         w(f"| {name} | {st[name]['median']:.2f} | {st[name]['p90']:.2f} | {st[name]['p95']:.2f} | {st[name]['max']:.2f} | "
           f"{o['median']:.2f} | {o['p95']:.2f} |")

@@ -103,19 +103,31 @@ std::vector<Match> ViewIndex::nearest(const Vfh& query, std::size_t per_object, 
   Eigen::Matrix<float, Eigen::Dynamic, 1> r(mean_.size());
   for (Eigen::Index b = 0; b < r.size(); ++b) r[b] = std::sqrt(std::max(0.0f, query[static_cast<std::size_t>(b)]));
   const Eigen::Matrix<float, kDirections, 1> q = directions_ * (r - mean_);
-  std::vector<std::pair<float, std::uint32_t>> near(n);
+  std::vector<float> near(n);
   const auto views = static_cast<std::ptrdiff_t>(n);
 #pragma omp parallel for schedule(static) if (n > 20000)
   for (std::ptrdiff_t v = 0; v < views; ++v) {
     const auto coordinates = Eigen::Map<const Eigen::Matrix<float, kDirections, 1>>(coordinates_.data() + static_cast<std::size_t>(v) * kDirections);
-    near[static_cast<std::size_t>(v)] = {(coordinates - q).squaredNorm(), static_cast<std::uint32_t>(v)};
+    near[static_cast<std::size_t>(v)] = (coordinates - q).squaredNorm();
   }
-  const std::size_t keep = std::min(n, std::max(candidates_, 8 * std::max(total, per_object)));
-  std::nth_element(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(keep - 1), near.end());
-  compared.resize(keep);
-#pragma omp parallel for schedule(static) if (keep > 500)
-  for (std::ptrdiff_t k = 0; k < static_cast<std::ptrdiff_t>(keep); ++k) {
-    const std::uint32_t v = near[static_cast<std::size_t>(k)].second;
+  // The `keep` nearest: the keep-th smallest distance found on a copy, then the views below it (and
+  // as many at it as fill the count), in view order.
+  const std::size_t keep = std::min(n, std::max(candidates_, 2 * std::max(total, per_object)));
+  std::vector<float> order = near;
+  std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep - 1), order.end());
+  const float cut = order[keep - 1];
+  std::vector<std::uint32_t> chosen;
+  chosen.reserve(keep);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    if (near[v] < cut) chosen.push_back(v);
+  }
+  for (std::uint32_t v = 0; v < n && chosen.size() < keep; ++v) {
+    if (near[v] == cut) chosen.push_back(v);
+  }
+  compared.resize(chosen.size());
+#pragma omp parallel for schedule(static) if (chosen.size() > 500)
+  for (std::ptrdiff_t k = 0; k < static_cast<std::ptrdiff_t>(chosen.size()); ++k) {
+    const std::uint32_t v = chosen[static_cast<std::size_t>(k)];
     compared[static_cast<std::size_t>(k)] = {v, chi_squared(query, db_->views[v].vfh)};
   }
   return capped(std::move(compared), objects_, db_->objects.size(), per_object, total);

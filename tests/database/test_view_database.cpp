@@ -167,7 +167,7 @@ TEST(ViewIndex, ASmallDatabaseGivesExactlyTheExhaustiveSearchesMatches) {
 TEST(ViewIndex, ALargeDatabaseFindsNearlyAllOfTheTrueNearestViews) {
   // 400 objects x 20 views of real histograms (the jug's and the can's, reshaped per repeat).
   const ViewDatabase db = scaled_database(small_db(), 400, 4);
-  const ViewIndex index(db, 1000);
+  const ViewIndex index(db);
   ASSERT_FALSE(index.exhaustive());
   std::size_t found = 0, wanted = 0;
   for (std::size_t q = 0; q < small_db().views.size(); q += 4) {
