@@ -8,6 +8,7 @@
 #include "test_support.hpp"
 #include "viewpose/eval/metrics.hpp"
 #include "viewpose/core/kdtree.hpp"
+#include "viewpose/core/threads.hpp"
 #include "viewpose/io/bop.hpp"
 #include "viewpose/io/pcd.hpp"
 #include "viewpose/io/ply.hpp"
@@ -51,6 +52,35 @@ TEST(Recognize, NoiseFreeJugAtOneMetreWithinFiveMillimetresAndTwoDegrees) {
     EXPECT_LT((d.T_camera_object.translation() - f.gt[0].T_camera_object.translation()).norm(), 0.005);
     EXPECT_LT(rotation_difference_deg(d.T_camera_object.linear(), f.gt[0].T_camera_object.linear()), 2.0);
     EXPECT_GT(d.score, 0.9);
+  }
+}
+
+TEST(Recognize, TheSameFrameGivesTheSameResultOnOneThreadAndOnTwo) {
+  // Frames whose right view is far down the matches (a view's rolls refined side by side) and one
+  // with two objects: detections, scores and hypothesis counts must not depend on the threads.
+  const Recognizer recognizer(jug_and_can_db());
+  SeedExperimentOptions setup;
+  setup.distances_m = {1.0};
+  setup.orientations = 4;
+  const SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, setup, 7);
+  const int threads = thread_count();
+  for (std::size_t k = 0; k < ds.scenes[0].images.size(); ++k) {
+    SCOPED_TRACE(k);
+    const Frame frame = frame_from_depth(simulate_image(ds, ds.scenes[0].images[k], SensorModel::kinect_v1(), 1).depth, K);
+    set_thread_count(1);
+    const Recognition one = recognizer.recognize(frame);
+    set_thread_count(2);
+    const Recognition two = recognizer.recognize(frame);
+    set_thread_count(threads);
+    ASSERT_EQ(one.detections.size(), two.detections.size());
+    EXPECT_EQ(one.hypotheses, two.hypotheses);
+    EXPECT_EQ(one.regions, two.regions);
+    for (std::size_t i = 0; i < one.detections.size(); ++i) {
+      EXPECT_EQ(one.detections[i].object_id, two.detections[i].object_id);
+      EXPECT_TRUE(one.detections[i].T_camera_object.matrix() == two.detections[i].T_camera_object.matrix());
+      EXPECT_EQ(one.detections[i].score, two.detections[i].score);
+      EXPECT_EQ(one.detections[i].runner_up_score, two.detections[i].runner_up_score);
+    }
   }
 }
 
