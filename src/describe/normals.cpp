@@ -11,7 +11,7 @@
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
-#include "viewpose/core/radix_sort.hpp"
+#include "viewpose/core/cell_grid.hpp"
 
 namespace viewpose {
 
@@ -88,34 +88,13 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
   // the cubes whose nearest corner lies within the radius of its own cube. The candidates are
   // gathered once per cube and shared by all its points, which makes this several times faster
   // than a radius search per point in a tree, with the same neighbours.
-  const float r = options.radius_m, inv = 2.0f / r, r2 = r * r;
-  constexpr std::int64_t kOffset = 1 << 20, kMask = (1 << 21) - 1;
-  const auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
-    return (static_cast<std::uint64_t>(x) << 42) | (static_cast<std::uint64_t>(y) << 21) | static_cast<std::uint64_t>(z);
-  };
-  std::vector<KeyedIndex> keyed;
-  keyed.reserve(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3f& p = cloud.points[i];
-    if (!p.allFinite()) continue;
-    std::int64_t c[3];
-    bool inside = true;
-    for (int a = 0; a < 3; ++a) {
-      c[a] = static_cast<std::int64_t>(std::floor(p[a] * inv)) + kOffset;
-      inside = inside && c[a] >= 2 && c[a] <= kMask - 2;
-    }
-    if (inside) keyed.emplace_back(key(c[0], c[1], c[2]), static_cast<std::uint32_t>(i));
-  }
-  radix_sort(keyed);
-  std::vector<std::uint64_t> cubes;
-  std::vector<std::size_t> first;
-  for (std::size_t k = 0; k < keyed.size(); ++k) {
-    if (k == 0 || keyed[k].first != keyed[k - 1].first) {
-      cubes.push_back(keyed[k].first);
-      first.push_back(k);
-    }
-  }
-  first.push_back(keyed.size());
+  const float r2 = options.radius_m * options.radius_m;
+  const CellGrid grid = bin_points(cloud.points, {}, 0.5f * options.radius_m, 2);
+  const std::vector<KeyedIndex>& keyed = grid.items;
+  const std::vector<std::uint64_t>& cubes = grid.cells;
+  const std::vector<std::size_t>& first = grid.first;
+  constexpr std::int64_t kMask = CellGrid::kMask;
+  const auto key = CellGrid::key;
   // The points' coordinates in cube order, so that a cube's points are copied as one run.
   std::vector<float> sorted_x(keyed.size()), sorted_y(keyed.size()), sorted_z(keyed.size());
   for (std::size_t k = 0; k < keyed.size(); ++k) {
@@ -130,9 +109,8 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
     const std::int64_t ox = column / 5 - 2, oy = column % 5 - 2;
     std::size_t b = 0;
     for (std::size_t a = 0; a < cubes.size(); ++a) {
-      const std::uint64_t c = cubes[a];
-      const std::uint64_t lo = key(static_cast<std::int64_t>(c >> 42) + ox, static_cast<std::int64_t>((c >> 21) & kMask) + oy,
-                                   static_cast<std::int64_t>(c & kMask) - 2);
+      const auto [x, y, z] = CellGrid::coordinates(cubes[a]);
+      const std::uint64_t lo = key(x + ox, y + oy, z - 2);
       while (b < cubes.size() && cubes[b] < lo) ++b;
       column_start[a * kColumns + static_cast<std::size_t>(column)] = static_cast<std::uint32_t>(b);
     }
@@ -145,9 +123,7 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
     std::vector<float> cx, cy, cz;  // the candidates, one array per coordinate
 #pragma omp for schedule(dynamic, 8)
     for (std::ptrdiff_t a = 0; a < n; ++a) {
-      const std::uint64_t c = cubes[static_cast<std::size_t>(a)];
-      const auto x = static_cast<std::int64_t>(c >> 42), y = static_cast<std::int64_t>((c >> 21) & kMask),
-                 z = static_cast<std::int64_t>(c & kMask);
+      const auto [x, y, z] = CellGrid::coordinates(cubes[static_cast<std::size_t>(a)]);
       cx.clear();
       cy.clear();
       cz.clear();

@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
-#include "viewpose/core/radix_sort.hpp"
+#include "viewpose/core/cell_grid.hpp"
 
 namespace viewpose {
 
@@ -28,34 +28,14 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
   // tolerance, so each cube is joined whole, and only cubes up to two apart need their points
   // compared, once, until the two are joined. Exactly the transitive closure of "closer than the
   // tolerance", without a radius search per point.
-  const float cell = o.tolerance_m / std::sqrt(3.0f), inv = 1.0f / cell, t2 = o.tolerance_m * o.tolerance_m;
-  constexpr std::int64_t kOffset = 1 << 20, kMask = (1 << 21) - 1;
-  const auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
-    return (static_cast<std::uint64_t>(x) << 42) | (static_cast<std::uint64_t>(y) << 21) | static_cast<std::uint64_t>(z);
-  };
-  std::vector<KeyedIndex> keyed;  // cube, position in `indices`
-  keyed.reserve(indices.size());
-  for (std::size_t k = 0; k < indices.size(); ++k) {
-    const Eigen::Vector3f& p = cloud.points[indices[k]];
-    if (!p.allFinite()) continue;
-    std::int64_t c[3];
-    bool inside = true;
-    for (int a = 0; a < 3; ++a) {
-      c[a] = static_cast<std::int64_t>(std::floor(p[a] * inv)) + kOffset;
-      inside = inside && c[a] >= 2 && c[a] <= kMask - 2;
-    }
-    if (inside) keyed.emplace_back(key(c[0], c[1], c[2]), static_cast<std::uint32_t>(k));
-  }
-  radix_sort(keyed);
-  std::vector<std::uint64_t> cubes;
-  std::vector<std::size_t> first;  // into keyed
-  for (std::size_t k = 0; k < keyed.size(); ++k) {
-    if (k == 0 || keyed[k].first != keyed[k - 1].first) {
-      cubes.push_back(keyed[k].first);
-      first.push_back(k);
-    }
-  }
-  first.push_back(keyed.size());
+  if (indices.empty()) return {};  // (bin_points reads an empty list as "every point")
+  const float t2 = o.tolerance_m * o.tolerance_m;
+  const CellGrid grid = bin_points(cloud.points, indices, o.tolerance_m / std::sqrt(3.0f), 2);
+  const std::vector<KeyedIndex>& keyed = grid.items;  // cube, position in `indices`
+  const std::vector<std::uint64_t>& cubes = grid.cells;
+  const std::vector<std::size_t>& first = grid.first;
+  constexpr std::int64_t kMask = CellGrid::kMask;
+  const auto key = CellGrid::key;
   std::vector<std::uint32_t> parent(cubes.size());
   for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   const auto find = [&](std::uint32_t i) {
@@ -77,8 +57,7 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
   std::vector<std::size_t> pointer(columns.size(), 0);
   const auto gap = [](std::int64_t d) { return std::max<std::int64_t>(std::abs(d) - 1, 0); };
   for (std::size_t a = 0; a < cubes.size(); ++a) {
-    const std::int64_t x = static_cast<std::int64_t>(cubes[a] >> 42), y = static_cast<std::int64_t>((cubes[a] >> 21) & kMask),
-                       z = static_cast<std::int64_t>(cubes[a] & kMask);
+    const auto [x, y, z] = CellGrid::coordinates(cubes[a]);
     for (std::size_t c = 0; c < columns.size(); ++c) {
       const auto [dx, dy] = columns[c];
       const bool same_column = dx == 0 && dy == 0;

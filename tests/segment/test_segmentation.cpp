@@ -345,6 +345,7 @@ TEST(Clusters, CubeGridGivesExactlyTheTransitiveClosure) {
   std::sort(expected.begin(), expected.end(), by_first);
   std::sort(got.begin(), got.end(), by_first);
   EXPECT_EQ(got, expected);
+  EXPECT_TRUE(euclidean_clusters(cloud, {}, o).empty()) << "no indices, no clusters";
 }
 
 }  // namespace
