@@ -115,8 +115,6 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
       column_start[a * kColumns + static_cast<std::size_t>(column)] = static_cast<std::uint32_t>(b);
     }
   }
-  // Squared gap, in cubes, between two cubes `d` apart along one axis.
-  const auto gap = [](std::int64_t d) { return std::max<std::int64_t>(std::abs(d) - 1, 0) * std::max<std::int64_t>(std::abs(d) - 1, 0); };
   const auto n = static_cast<std::ptrdiff_t>(cubes.size());
 #pragma omp parallel
   {
@@ -134,7 +132,7 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
         for (std::size_t b = column_start[static_cast<std::size_t>(a) * kColumns + static_cast<std::size_t>(column)];
              b < cubes.size() && cubes[b] <= hi; ++b) {
           const auto oz = static_cast<std::int64_t>(cubes[b] & kMask) - z;
-          if (gap(ox) + gap(oy) + gap(oz) > 4) continue;  // no point of that cube is within the radius
+          if (CellGrid::squared_gap(ox, oy, oz) > 4) continue;  // no point of that cube is within the radius
           cx.insert(cx.end(), sorted_x.begin() + static_cast<std::ptrdiff_t>(first[b]), sorted_x.begin() + static_cast<std::ptrdiff_t>(first[b + 1]));
           cy.insert(cy.end(), sorted_y.begin() + static_cast<std::ptrdiff_t>(first[b]), sorted_y.begin() + static_cast<std::ptrdiff_t>(first[b + 1]));
           cz.insert(cz.end(), sorted_z.begin() + static_cast<std::ptrdiff_t>(first[b]), sorted_z.begin() + static_cast<std::ptrdiff_t>(first[b + 1]));

@@ -55,7 +55,6 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
     for (int dy = -2; dy <= 2; ++dy)
       if (dx > 0 || dy >= 0) columns.emplace_back(dx, dy);
   std::vector<std::size_t> pointer(columns.size(), 0);
-  const auto gap = [](std::int64_t d) { return std::max<std::int64_t>(std::abs(d) - 1, 0); };
   for (std::size_t a = 0; a < cubes.size(); ++a) {
     const auto [x, y, z] = CellGrid::coordinates(cubes[a]);
     for (std::size_t c = 0; c < columns.size(); ++c) {
@@ -67,7 +66,7 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
       for (std::size_t j = b; j < cubes.size() && cubes[j] <= hi; ++j) {
         const std::int64_t dz = static_cast<std::int64_t>(cubes[j] & kMask) - z;
         // Cubes whose nearest corners are farther apart than the tolerance cannot be linked.
-        if (gap(dx) * gap(dx) + gap(dy) * gap(dy) + gap(dz) * gap(dz) > 3) continue;
+        if (CellGrid::squared_gap(dx, dy, dz) > 3) continue;
         const std::uint32_t ra = find(static_cast<std::uint32_t>(a)), rb = find(static_cast<std::uint32_t>(j));
         if (ra != rb && linked(a, j)) parent[std::max(ra, rb)] = std::min(ra, rb);
       }

@@ -26,6 +26,13 @@ struct CellGrid {
             static_cast<std::int64_t>(key & static_cast<std::uint64_t>(kMask))};
   }
 
+  /// The smallest distance, in cell sides squared, between any points of two cells whose
+  /// coordinates differ by (dx, dy, dz): neighbouring cells touch (0).
+  static std::int64_t squared_gap(std::int64_t dx, std::int64_t dy, std::int64_t dz) {
+    const auto g = [](std::int64_t d) { return d > 1 ? d - 1 : d < -1 ? -d - 1 : 0; };
+    return g(dx) * g(dx) + g(dy) * g(dy) + g(dz) * g(dz);
+  }
+
   std::vector<KeyedIndex> items;     ///< (cell key, the point's position in the input), sorted by key
   std::vector<std::uint64_t> cells;  ///< the occupied cells' keys, ascending
   std::vector<std::size_t> first;    ///< cells.size() + 1 entries: cell c's items are [first[c], first[c + 1])
