@@ -74,11 +74,19 @@ std::vector<float> crh_roll_angles(const Crh& view, const Crh& scene, const Roll
     product[static_cast<std::size_t>(k)] = magnitude > 0 ? std::complex<double>(ab / magnitude) : 0.0;
   }
   product[kBins - 1] = static_cast<double>(view[kBins - 1]) * scene[kBins - 1];
+  // The inverse transform's real part at each lag, from a table of the 180 roots of unity (the
+  // angle of harmonic k at lag n is that of root k n mod 180): no sine or cosine per term.
+  static const std::array<std::complex<double>, kLags> roots = [] {
+    std::array<std::complex<double>, kLags> r{};
+    for (int m = 0; m < kLags; ++m) r[static_cast<std::size_t>(m)] = std::polar(1.0, 2 * kPi * m / kLags);
+    return r;
+  }();
   std::vector<std::pair<float, int>> scored(kLags);
   for (int n = 0; n < kLags; ++n) {
     double re = 0;
     for (int k = 0; k < kLags; ++k) {
-      if (product[static_cast<std::size_t>(k)] != 0.0) re += (product[static_cast<std::size_t>(k)] * std::polar(1.0, 2 * kPi * k * n / kLags)).real();
+      const std::complex<double>& p = product[static_cast<std::size_t>(k)];
+      if (p != 0.0) re += (p * roots[static_cast<std::size_t>((k * n) % kLags)]).real();
     }
     scored[static_cast<std::size_t>(n)] = {static_cast<float>(re), n};
   }
