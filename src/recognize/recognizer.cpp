@@ -2,7 +2,6 @@
 
 #include "viewpose/core/stopwatch.hpp"
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <span>
 
@@ -146,8 +145,7 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const T
                                                                std::uint32_t object,
                                                                std::span<const Eigen::Vector3f> icp_source,
                                                                std::span<const Eigen::Vector3f> cluster, const Frame& frame,
-                                                               const VerifyOptions& verify, bool verify_lost,
-                                                               StageTimes& times) const {
+                                                               const VerifyOptions& verify, StageTimes& times) const {
   std::vector<Refined> out(T_camera_object_initial.size());
   const IcpTarget& target = icp_target(object);
   const VerifyModel model = verify_model(object);
@@ -160,7 +158,7 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const T
     h.icp = icp_point_to_plane(icp_source, target, T_camera_object_initial[static_cast<std::size_t>(k)].inverse(), options_.icp);
     h.icp_ms = ms_since(t);
     h.T_camera_object = h.icp.T_target_source.inverse();
-    if (!verify_lost && h.icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
+    if (h.icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
     t = Clock::now();
     h.v = verify_pose(model, h.T_camera_object, frame.depth, frame.K, cluster, verify);
     h.verify_ms = ms_since(t);
@@ -206,7 +204,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
     }
     // All rolls at once on the threads there are; then taken in order, as one after the other would.
     const std::vector<Refined> refined = refine_and_verify(initial, view.object, icp_source, d.cloud.points, frame, verify,
-                                                           /*verify_lost=*/false, out.times);
+                                                           out.times);
     for (std::size_t k = 0; k < refined.size(); ++k) {
       const Refined& h = refined[k];
       ++out.hypotheses;
@@ -260,7 +258,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
       initial.push_back(best->T_camera_object * make_transform(R, centre - R * centre));
     }
     const std::vector<Refined> turned = refine_and_verify(initial, object_index, icp_source, d.cloud.points, frame, verify,
-                                                          /*verify_lost=*/false, out.times);
+                                                          out.times);
     out.hypotheses += turned.size();
     Detection chosen = *best;
     double runner_up = 0;

@@ -126,7 +126,7 @@ class Recognizer {
 
   const ViewDatabase& db_;
   RecognizerOptions options_;
-  // One initial pose refined by ICP and, unless ICP lost the object (or verify_lost), verified.
+  // One initial pose refined by ICP and, unless ICP lost the object, verified.
   struct Refined {
     IcpResult icp;
     Transform T_camera_object = Transform::Identity();
@@ -138,8 +138,7 @@ class Recognizer {
   // the order given, so that what is made of them does not depend on the threads.
   std::vector<Refined> refine_and_verify(std::span<const Transform> T_camera_object_initial, std::uint32_t object,
                                          std::span<const Eigen::Vector3f> icp_source, std::span<const Eigen::Vector3f> cluster,
-                                         const Frame& frame, const VerifyOptions& verify, bool verify_lost,
-                                         StageTimes& times) const;
+                                         const Frame& frame, const VerifyOptions& verify, StageTimes& times) const;
   // What ICP and verification need of an object, made on its first hypothesis: a database of a
   // thousand objects costs nothing for the objects a scene never suggests.
   struct PreparedObject {
