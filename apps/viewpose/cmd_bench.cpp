@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
@@ -146,6 +147,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                                   {"total", {}}};
     std::vector<double> hypotheses, per_hypothesis_ms, match_per_region_ms;
     std::size_t targets = 0, found = 0, found_add = 0, wrong = 0;
+    std::vector<std::size_t> failed_frames;  // a pose missed or a wrong detection: worth looking at
     {
       ProgressBar bar("bench", frames.size());
       for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -181,6 +183,8 @@ void add_bench_command(CLI::App& app, int& exit_code) {
           found += right ? 1 : 0;
           wrong += right ? 0 : 1;
         }
+        const std::size_t right_here = static_cast<std::size_t>(std::count(paired.begin(), paired.end(), 1));
+        if (right_here < frames[i].gt.size() || r.detections.size() > right_here) failed_frames.push_back(i);
         bar.update(i + 1);
       }
     }
@@ -212,6 +216,8 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       fmt::print("poses right (ADD-S < 10 % of the diameter): {} of {} ({:.1f} %), the right way round too (ADD): {}; "
                  "wrong detections: {}\n", found, targets, 100.0 * static_cast<double>(found) / static_cast<double>(targets),
                  found_add, wrong);
+      if (!failed_frames.empty())
+        fmt::print("frames with a pose missed or wrong (0-based): {}\n", fmt::join(failed_frames, " "));
     }
     const double rss = peak_rss_mib();
     fmt::print("peak resident memory: {:.0f} MiB\n", rss);
@@ -220,7 +226,8 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                                 {"objects", db.objects.size()}, {"views", db.views.size()},
                                 {"db_build_ms", db_build_ms}, {"prepare_ms", prepare_ms}, {"stages_ms", jstages}, {"fps", fps},
                                 {"hypotheses_median", hyp_med}, {"icp_verify_per_hypothesis_ms", per_hyp}, {"match_per_cluster_ms", match_per_region},
-                                {"targets", targets}, {"right", found}, {"right_add", found_add}, {"wrong", wrong}, {"peak_rss_mib", rss}};
+                                {"targets", targets}, {"right", found}, {"right_add", found_add}, {"wrong", wrong}, {"failed_frames", failed_frames},
+                                {"peak_rss_mib", rss}};
       write_file_atomic(o->json, j.dump(2) + "\n");
     }
     exit_code = 0;
