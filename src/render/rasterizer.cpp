@@ -31,8 +31,8 @@ ProjectedVertex project(const CameraIntrinsics& K, const Eigen::Vector3d& p) {
 // Rasterizes one camera-frame triangle (all vertices in front of the near plane) into the frame.
 class TriangleRasterizer {
  public:
-  TriangleRasterizer(const CameraIntrinsics& K, RenderedFrame& frame, bool normals, int closed_winding)
-      : K_(K), frame_(frame), normals_(normals), closed_winding_(closed_winding) {}
+  TriangleRasterizer(const CameraIntrinsics& K, RenderedFrame& frame, bool normals, bool instances, int closed_winding)
+      : K_(K), frame_(frame), normals_(normals), instances_(instances), closed_winding_(closed_winding) {}
 
   void draw(const ProjectedVertex& a, const ProjectedVertex& b, const ProjectedVertex& c, std::int32_t instance) {
     const std::array<Eigen::Vector3d, 3> p = {a.p, b.p, c.p};
@@ -76,7 +76,7 @@ class TriangleRasterizer {
         float& depth = frame_.depth.depth_m[i];
         if (!(z >= depth)) {  // also true when depth is NaN (nothing drawn yet)
           depth = static_cast<float>(z);
-          frame_.instance[i] = instance;
+          if (instances_) frame_.instance[i] = instance;
           if (normals_) frame_.normal[i] = n;
         }
       }
@@ -86,7 +86,7 @@ class TriangleRasterizer {
  private:
   const CameraIntrinsics& K_;
   RenderedFrame& frame_;
-  bool normals_;
+  bool normals_, instances_;
   int closed_winding_;
 };
 
@@ -110,9 +110,9 @@ RenderedFrame render(std::span<const MeshInstance> instances, const CameraIntrin
   if (!(options.near_m > 0)) throw Error(fmt::format("render: near plane {} must be positive", options.near_m));
   RenderedFrame frame;
   frame.depth = DepthImage(K.width, K.height);
-  frame.instance.assign(frame.depth.depth_m.size(), -1);
+  if (options.instances) frame.instance.assign(frame.depth.depth_m.size(), -1);
   if (options.normals) frame.normal.assign(frame.depth.depth_m.size(), Eigen::Vector3f::Zero());
-  TriangleRasterizer raster(K, frame, options.normals, options.closed_winding);
+  TriangleRasterizer raster(K, frame, options.normals, options.instances, options.closed_winding);
   std::vector<ProjectedVertex> vertices;  // each vertex transformed and projected once
   for (std::size_t m = 0; m < instances.size(); ++m) {
     const TriangleMesh& mesh = *instances[m].mesh;

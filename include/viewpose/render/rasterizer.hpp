@@ -21,6 +21,7 @@ struct MeshInstance {
 struct RenderOptions {
   double near_m = 0.01;  ///< triangles are clipped at this depth
   bool normals = false;  ///< also return each pixel's surface normal
+  bool instances = true;  ///< also return which instance each pixel shows (verification needs depth only)
   /// Skip the back faces of closed meshes, wound as closed_mesh_winding() says (+1 or -1; 0 draws
   /// every triangle). The picture is the same, drawn in about half the time. Only for closed meshes.
   int closed_winding = 0;
@@ -28,7 +29,7 @@ struct RenderOptions {
 
 struct RenderedFrame {
   DepthImage depth;                    ///< metres along z; NaN where no surface
-  std::vector<std::int32_t> instance;  ///< per pixel: index of the instance seen, -1 for none
+  std::vector<std::int32_t> instance;  ///< per pixel: index of the instance seen, -1 for none (if asked)
   std::vector<Eigen::Vector3f> normal;  ///< per pixel, camera frame, facing the camera (if asked)
 };
 
