@@ -15,7 +15,8 @@ namespace {
 
 void keep_by_size(std::vector<Cluster>& clusters, const ClusterOptions& o) {
   std::erase_if(clusters, [&](const Cluster& c) { return c.size() < o.min_points || c.size() > o.max_points; });
-  for (auto& c : clusters) std::sort(c.begin(), c.end());
+  for (auto& c : clusters)
+    if (!std::is_sorted(c.begin(), c.end())) std::sort(c.begin(), c.end());
   std::stable_sort(clusters.begin(), clusters.end(), [](const Cluster& a, const Cluster& b) { return a.size() > b.size(); });
 }
 
@@ -42,10 +43,13 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
     return i;
   };
+  // The points in cube order, so that a cube's points are one run in memory.
+  std::vector<Eigen::Vector3f> sorted(keyed.size());
+  for (std::size_t k = 0; k < keyed.size(); ++k) sorted[k] = cloud.points[indices[keyed[k].second]];
   const auto linked = [&](std::size_t a, std::size_t b) {
     for (std::size_t i = first[a]; i < first[a + 1]; ++i)
       for (std::size_t j = first[b]; j < first[b + 1]; ++j)
-        if ((cloud.points[indices[keyed[i].second]] - cloud.points[indices[keyed[j].second]]).squaredNorm() <= t2) return true;
+        if ((sorted[i] - sorted[j]).squaredNorm() <= t2) return true;
     return false;
   };
   // The later columns (x, y) within two cubes, and the same column: keys only grow from cube to cube,
@@ -54,6 +58,11 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
   for (int dx = 0; dx <= 2; ++dx)
     for (int dy = -2; dy <= 2; ++dy)
       if (dx > 0 || dy >= 0) columns.emplace_back(dx, dy);
+  // The pairs of cubes that may hold linked points, found in one pass. Touching cubes are tried
+  // first: they are nearly always linked by their first few pairs. Then cubes further apart, most
+  // of which are joined by then and need no comparison (taken in key order instead, every pair of
+  // points of two cubes across a gap was compared before their clusters met).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> touching, apart;
   std::vector<std::size_t> pointer(columns.size(), 0);
   for (std::size_t a = 0; a < cubes.size(); ++a) {
     const auto [x, y, z] = CellGrid::coordinates(cubes[a]);
@@ -66,10 +75,16 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
       for (std::size_t j = b; j < cubes.size() && cubes[j] <= hi; ++j) {
         const std::int64_t dz = static_cast<std::int64_t>(cubes[j] & kMask) - z;
         // Cubes whose nearest corners are farther apart than the tolerance cannot be linked.
-        if (CellGrid::squared_gap(dx, dy, dz) > 3) continue;
-        const std::uint32_t ra = find(static_cast<std::uint32_t>(a)), rb = find(static_cast<std::uint32_t>(j));
-        if (ra != rb && linked(a, j)) parent[std::max(ra, rb)] = std::min(ra, rb);
+        const std::int64_t gap = CellGrid::squared_gap(dx, dy, dz);
+        if (gap > 3) continue;
+        (gap == 0 ? touching : apart).emplace_back(static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(j));
       }
+    }
+  }
+  for (const auto* pairs : {&touching, &apart}) {
+    for (const auto& [a, j] : *pairs) {
+      const std::uint32_t ra = find(a), rb = find(j);
+      if (ra != rb && linked(a, j)) parent[std::max(ra, rb)] = std::min(ra, rb);
     }
   }
   // Clusters in the order of their first point, as a region growing from each unvisited point would give.
@@ -85,11 +100,16 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
   std::sort(roots.begin(), roots.end(), [&](std::uint32_t l, std::uint32_t r) { return smallest[l] < smallest[r]; });
   std::vector<std::uint32_t> slot(cubes.size(), 0);
   for (std::uint32_t k = 0; k < roots.size(); ++k) slot[roots[k]] = k;
-  std::vector<Cluster> clusters(roots.size());
+  // Each point's cluster, then the points in the order given: a cluster's points come out in the
+  // order of `indices`, as they would from a region growing, without sorting each cluster.
+  std::vector<std::uint32_t> label(indices.size(), UINT32_MAX);
   for (std::size_t a = 0; a < cubes.size(); ++a) {
-    Cluster& c = clusters[slot[find(static_cast<std::uint32_t>(a))]];
-    for (std::size_t i = first[a]; i < first[a + 1]; ++i) c.push_back(indices[keyed[i].second]);
+    const std::uint32_t l = slot[find(static_cast<std::uint32_t>(a))];
+    for (std::size_t i = first[a]; i < first[a + 1]; ++i) label[keyed[i].second] = l;
   }
+  std::vector<Cluster> clusters(roots.size());
+  for (std::size_t k = 0; k < indices.size(); ++k)
+    if (label[k] != UINT32_MAX) clusters[label[k]].push_back(indices[k]);
   keep_by_size(clusters, o);
   return clusters;
 }
