@@ -27,7 +27,8 @@ std::vector<Match> nearest_views_per_object(const ViewDatabase& db, const Vfh& q
 
 /// Matching for large databases (a thousand objects, 80,000 views) in under a millisecond. Each
 /// view's histogram is kept, square-rooted, as its coordinates along the 16 principal directions
-/// of the database's square-rooted histograms. The chi-squared distance lies between one and two
+/// of the database's square-rooted histograms (one byte each, in steps of 1/127 of the
+/// direction's range). The chi-squared distance lies between one and two
 /// times the squared Euclidean distance of square-rooted histograms, and 16 directions hold most
 /// of the differences between views: the `candidates` views nearest the query in those
 /// coordinates are compared in full, and the nearest of them returned. Approximate, so measured:
@@ -50,6 +51,7 @@ class ViewIndex {
   std::vector<std::uint32_t> objects_;  // per view
   Eigen::Matrix<float, kDirections, Eigen::Dynamic> directions_;  // principal directions, one per row (x 308)
   Eigen::Matrix<float, Eigen::Dynamic, 1> mean_;                   // of the square-rooted histograms
-  std::vector<float> coordinates_;  // kDirections per view; empty: exhaustive search
+  float step_[kDirections] = {};     // each direction's coordinates are multiples of its step
+  std::vector<std::int8_t> coordinates_;  // kDirections per view, in steps; empty: exhaustive search
 };
 }  // namespace viewpose
