@@ -53,11 +53,12 @@ struct NeighbourSums {
 bool smallest_eigen(const Eigen::Matrix3d& cov, Eigen::Vector3d& vector, double& value_over_trace) {
   const double trace = cov.trace();
   if (!(trace > 0)) return false;
-  const Eigen::Matrix3d a = cov / trace;  // eigenvalues in [0, 1], summing to 1
+  const Eigen::Matrix3d a = cov * (1.0 / trace);  // eigenvalues in [0, 1], summing to 1
   const double c1 = a(0, 0) * a(1, 1) - a(0, 1) * a(0, 1) + a(0, 0) * a(2, 2) - a(0, 2) * a(0, 2) + a(1, 1) * a(2, 2) - a(1, 2) * a(1, 2);
   const double c0 = a.determinant();
-  // det(l I - a) = l^3 - l^2 + c1 l - c0
-  double l = 0;
+  if (!(c1 > 0)) return false;  // two eigenvalues are 0: a line
+  // det(l I - a) = l^3 - l^2 + c1 l - c0, from Newton's first step from 0.
+  double l = c0 / c1;
   for (int iteration = 0; iteration < 32; ++iteration) {
     // Halley's step: three correct digits become nine, so two or three steps are enough.
     const double f = ((l - 1) * l + c1) * l - c0, df = (3 * l - 2) * l + c1, ddf = 6 * l - 2;
@@ -65,7 +66,7 @@ bool smallest_eigen(const Eigen::Matrix3d& cov, Eigen::Vector3d& vector, double&
     if (!(df > 0 && denominator > 0)) break;
     const double step = 2 * f * df / denominator;
     l -= step;
-    if (std::abs(step) <= 1e-9) break;
+    if (std::abs(step) <= 1e-8) break;  // the normal then is within 1e-6 rad
   }
   const Eigen::Matrix3d m = a - l * Eigen::Matrix3d::Identity();
   const Eigen::Vector3d c[3] = {m.row(0).cross(m.row(1)), m.row(0).cross(m.row(2)), m.row(1).cross(m.row(2))};
