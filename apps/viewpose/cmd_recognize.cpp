@@ -54,7 +54,9 @@ Eigen::Vector3d yaw_pitch_roll_deg(const Eigen::Matrix3d& R) {
   return Eigen::Vector3d(yaw, pitch, roll) * 180.0 / std::numbers::pi;
 }
 
-nlohmann::json to_json(const Recognition& r) {
+}  // namespace
+
+nlohmann::json recognition_json(const Recognition& r) {
   nlohmann::json dets = nlohmann::json::array();
   for (const Detection& d : r.detections) {
     const Eigen::Matrix3d R = d.T_camera_object.linear();
@@ -78,8 +80,6 @@ nlohmann::json to_json(const Recognition& r) {
                         {"vfh", t.vfh_ms}, {"match", t.match_ms}, {"crh", t.crh_ms}, {"icp", t.icp_ms},
                         {"verify", t.verify_ms}, {"split", t.split_ms}, {"total", t.total_ms}}}};
 }
-
-}  // namespace
 
 void print_recognition(const Recognition& r) {
   if (r.detections.empty()) fmt::print("no known object found ({} clusters, {} poses tried)\n", r.clusters, r.hypotheses);
@@ -118,7 +118,7 @@ void add_recognize_command(CLI::App& app, int& exit_code) {
     const Recognition r = recognizer.recognize(frame);
     print_recognition(r);
     if (!o->json.empty()) {
-      nlohmann::json j = to_json(r);
+      nlohmann::json j = recognition_json(r);
       j["scene"] = o->scene;
       write_file_atomic(o->json, j.dump(1) + "\n");
     }
@@ -190,7 +190,7 @@ void add_bop_command(CLI::App& app, int& exit_code) {
           ++detections;
         }
         if (!o->details.empty()) {
-          nlohmann::json line = to_json(r);
+          nlohmann::json line = recognition_json(r);
           line["scene_id"] = im.scene_id;
           line["im_id"] = im.im_id;
           line["seconds"] = seconds;

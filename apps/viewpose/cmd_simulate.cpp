@@ -16,6 +16,7 @@
 #include "viewpose/io/bop.hpp"
 #include "viewpose/io/image_png.hpp"
 #include "viewpose/render/shapes.hpp"
+#include "viewpose/sensor/kinect_raw.hpp"
 #include "viewpose/simulate/bop_writer.hpp"
 #include "viewpose/visualize/image.hpp"
 
@@ -62,7 +63,7 @@ void add_simulate_command(CLI::App& app, int& exit_code) {
     int orientations = 20;
     std::vector<double> distances{0.75, 1.00, 1.25, 1.50, 2.00};
     int images = 20;
-    std::string contact_sheet;
+    std::string contact_sheet, fakenect;
     CameraFlags camera;
   };
   auto o = std::make_shared<Options>();
@@ -82,6 +83,9 @@ void add_simulate_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--distances", o->distances, "seed-experiment: distances in metres")->delimiter(',')->capture_default_str();
   cmd->add_option("--images", o->images, "clutter: number of images")->check(CLI::Range(1, 100000))->capture_default_str();
   cmd->add_option("--contact-sheet", o->contact_sheet, "Also write a PNG of a few frames, to look at");
+  cmd->add_option("--fakenect", o->fakenect,
+                  "Also write the frames, in order, as a fakenect recording (raw Kinect disparity) to replay through "
+                  "libfreenect: viewpose live --source freenect with FAKENECT_PATH=DIR");
   o->camera.add_to(*cmd);
   cmd->footer("The camera defaults to a Kinect v1 / Xtion at VGA (fx = fy = 525).");
   cmd->callback([o, &exit_code] {
@@ -122,6 +126,15 @@ void add_simulate_command(CLI::App& app, int& exit_code) {
                ds.scenes.size(), total, objects.size(), o->no_noise ? "noise-free" : "Kinect v1 sensor model", seconds,
                1000.0 * seconds / static_cast<double>(std::max<std::size_t>(total, 1)));
     for (const auto& s : ds.scenes) fmt::print("  scene {:06d}: {} images, {}\n", s.scene_id, s.images.size(), s.description);
+    if (!o->fakenect.empty()) {
+      // The frames as written (millimetres), so that the dataset's ground truth holds for the recording.
+      const BopDataset written = open_bop_dataset(o->out, "test");
+      std::vector<DepthImage> frames;
+      for (const BopImage& image : written.images) frames.push_back(load_bop_frame(image).depth);
+      write_fakenect_recording(o->fakenect, frames);
+      fmt::print("fakenect recording: {} ({} frames at 30 a second; the ground truth is {}'s, in the same order)\n",
+                 o->fakenect, frames.size(), o->out);
+    }
     if (!o->contact_sheet.empty()) {
       write_contact_sheet(o->out, "test", o->contact_sheet, 8);
       fmt::print("contact sheet: {}\n", o->contact_sheet);

@@ -4,8 +4,10 @@
 #include <filesystem>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "viewpose/io/inspect.hpp"
+#include "viewpose/recognize/recognizer.hpp"
 
 namespace viewpose::cli {
 
@@ -17,6 +19,12 @@ void add_eval_command(CLI::App& app, int& exit_code);
 void add_bench_command(CLI::App& app, int& exit_code);
 void add_recognize_command(CLI::App& app, int& exit_code);
 void add_bop_command(CLI::App& app, int& exit_code);
+void add_live_command(CLI::App& app, int& exit_code);
+
+/// Detections (pose, score, verification) and per-stage times (ms), as `recognize --json` writes them.
+nlohmann::json recognition_json(const Recognition& r);
+/// The detections and times in words, as `viewpose recognize` prints them.
+void print_recognition(const Recognition& r);
 
 /// Prints what inspect_file found, as `viewpose info` shows it.
 void print_file_info(const std::filesystem::path& path, const FileInfo& info);

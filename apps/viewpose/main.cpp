@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   viewpose::cli::add_bop_command(app, exit_code);
   viewpose::cli::add_eval_command(app, exit_code);
   viewpose::cli::add_bench_command(app, exit_code);
+  viewpose::cli::add_live_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -111,6 +111,35 @@ file(WRITE "${WORK}/truncated.csv" "scene_id,im_id,obj_id,score,R,t,time\n1,0,1,
 run(FALSE eval --dataset "${WORK}/sim" --results "${WORK}/truncated.csv")
 expect_in("${ERR}" "truncated.csv")
 
+# Live input: a simulated recording played through libfreenect's fakenect (when this build has
+# the Kinect back-end), recorded by `live --record`, and that recording replayed as a source.
+run(TRUE simulate --preset seed-experiment --orientations 2 --distances 1.0 --seed 4 -o "${WORK}/live_sim"
+    --fakenect "${WORK}/live_fakenect")
+expect_in("${OUT}" "fakenect recording: ${WORK}/live_fakenect (2 frames")
+if(FAKENECT_DIR)
+  # (No leak report: fakenect keeps its buffers to the end, and it is not ours.)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env FAKENECT_PATH=${WORK}/live_fakenect LD_LIBRARY_PATH=${FAKENECT_DIR}
+                          ASAN_OPTIONS=detect_leaks=0
+                          ${VIEWPOSE} live --db "${WORK}/jug.vpdb" --source freenect --json-lines --record "${WORK}/live_rec"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "live through fakenect failed (${rc}):\n${out}\n${err}")
+  endif()
+  expect_in("${out}" "{\"clusters\":1,\"detections\":[{")
+  expect_in("${out}" "\"object_name\":\"jug\"")
+  expect_in("${err}" "the recording ended")
+  expect_in("${err}" "2 recognized")
+  expect_in("${err}" "recorded 2 frames in ${WORK}/live_rec")
+  run(TRUE live --db "${WORK}/jug.vpdb" --source "recording:${WORK}/live_rec")
+  expect_in("${OUT}" "frame 1 at")
+  expect_in("${OUT}" ": jug at (")
+  run(FALSE live --db "${WORK}/jug.vpdb" --source freenect:0 --record "${WORK}/live_rec")
+endif()
+run(FALSE live --db "${WORK}/jug.vpdb" --source "recording:${WORK}/no-such-recording")
+expect_in("${ERR}" "no-such-recording: no such folder")
+run(FALSE live --db "${WORK}/jug.vpdb" --source kinect2)
+expect_in("${ERR}" "unknown source 'kinect2'")
+
 # A scanned view: a cloud of the object alone becomes a database of its own.
 file(REMOVE "${WORK}/scanned.vpdb")
 run(TRUE db add-view "${WORK}/al.ply" --object scene-and-jug --db "${WORK}/scanned.vpdb")

@@ -1,0 +1,170 @@
+// `viewpose live`: recognition on a camera's stream (or a recording of one), frame after frame.
+// A camera thread grabs frames (and records them, when asked) into a one-frame mailbox; the main
+// thread recognizes the newest. Frames that arrive while one is being recognized replace each
+// other and are counted as dropped. Ctrl-C (or SIGTERM) ends the run cleanly with a summary; a
+// second Ctrl-C kills it.
+#include <atomic>
+#include <csignal>
+#include <exception>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "camera_flags.hpp"
+#include "commands.hpp"
+#include "viewpose/core/error.hpp"
+#include "viewpose/core/stopwatch.hpp"
+#include "viewpose/recognize/frame.hpp"
+#include "viewpose/sensor/depth_source.hpp"
+#include "viewpose/sensor/latest_frame.hpp"
+
+namespace viewpose::cli {
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void on_stop_signal(int signal) {
+  g_stop = true;
+  std::signal(signal, SIG_DFL);  // a second one ends the process at once
+}
+
+std::string one_line(const Recognition& r) {
+  if (r.detections.empty()) return fmt::format("nothing found ({} clusters)", r.clusters);
+  std::string out;
+  for (const Detection& d : r.detections) {
+    const Eigen::Vector3d t = d.T_camera_object.translation();
+    out += fmt::format("{}{} at ({:.3f}, {:.3f}, {:.3f}) m, score {:.2f}", out.empty() ? "" : "; ", d.object_name, t.x(),
+                       t.y(), t.z(), d.score);
+  }
+  return out;
+}
+
+}  // namespace
+
+void add_live_command(CLI::App& app, int& exit_code) {
+  struct Options {
+    std::string db, source, record;
+    CameraFlags camera;
+    bool json_lines = false, no_split = false;
+    int frames = 0;
+    double seconds = 0;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand("live", "Recognize objects in a depth camera's stream, frame after frame");
+  cmd->add_option("--db", o->db, "View database (viewpose db build)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--source", o->source,
+                  "freenect[:INDEX] (Kinect v1), openni2[:URI or FILE.oni] (Xtion, PrimeSense, Kinect), or "
+                  "recording:DIR (a folder --record wrote)")
+      ->required();
+  o->camera.add_to(*cmd);
+  cmd->add_flag("--json-lines", o->json_lines, "Print one JSON object per recognized frame instead of text");
+  cmd->add_option("--record", o->record, "Also save every frame received, as a BOP scene folder (depth PNGs and scene_camera.json)");
+  cmd->add_option("--frames", o->frames, "Stop after recognizing this many frames (default: until Ctrl-C or the recording ends)")
+      ->check(CLI::Range(0, 1 << 30));
+  cmd->add_option("--seconds", o->seconds, "Stop after this many seconds")->check(CLI::Range(0.0, 1e7));
+  cmd->add_flag("--no-split", o->no_split, "Do not split clusters in which nothing is found (faster)");
+  cmd->callback([o, &exit_code] {
+    const ViewDatabase db = ViewDatabase::load(o->db);
+    RecognizerOptions options;
+    options.split_touching = !o->no_split;
+    const Recognizer recognizer(db, options);
+    const std::unique_ptr<DepthSource> source = open_depth_source(o->source);
+    CameraIntrinsics K = source->intrinsics();
+    if (const auto cam = o->camera.camera()) {
+      // The user's calibration; the image size stays the stream's.
+      K.fx = cam->K.fx, K.fy = cam->K.fy, K.cx = cam->K.cx, K.cy = cam->K.cy;
+      if (cam->K.width > 0 && (cam->K.width != K.width || cam->K.height != K.height)) {
+        throw Error(fmt::format("live: the camera file is for {}x{} images, the stream gives {}x{}", cam->K.width,
+                                cam->K.height, K.width, K.height));
+      }
+    }
+    K.validate();
+    std::unique_ptr<DepthRecorder> recorder;
+    if (!o->record.empty()) recorder = std::make_unique<DepthRecorder>(o->record, K);
+    fmt::print(stderr, "live: {} ({}x{}, fx {:.1f}); Ctrl-C to stop\n", source->description(), K.width, K.height, K.fx);
+
+    g_stop = false;
+    std::signal(SIGINT, on_stop_signal);
+    std::signal(SIGTERM, on_stop_signal);
+    LatestFrame mailbox;
+    std::exception_ptr camera_error;
+    bool source_ended = false;
+    std::thread camera([&] {
+      try {
+        while (!g_stop) {
+          std::optional<DepthImage> depth = source->next(std::chrono::milliseconds(100));
+          if (!depth) {
+            if (source->ended()) break;
+            continue;
+          }
+          if (recorder) recorder->add(*depth);
+          mailbox.put(std::move(*depth));
+        }
+        source_ended = source->ended();
+      } catch (...) {
+        camera_error = std::current_exception();
+      }
+      mailbox.close();
+    });
+
+    const auto start = Clock::now();
+    std::size_t recognized = 0;
+    try {
+      while (!g_stop) {
+        if (o->frames > 0 && recognized >= static_cast<std::size_t>(o->frames)) break;
+        if (o->seconds > 0 && ms_since(start) >= 1000.0 * o->seconds) break;
+        std::optional<DepthImage> depth = mailbox.take(std::chrono::milliseconds(200));
+        if (!depth) {
+          if (mailbox.closed()) break;
+          continue;
+        }
+        const double t_s = ms_since(start) / 1000.0;
+        const auto t0 = Clock::now();
+        const Frame frame = frame_from_depth(std::move(*depth), K);
+        const Recognition r = recognizer.recognize(frame);
+        const double ms = ms_since(t0);
+        ++recognized;
+        if (o->json_lines) {
+          nlohmann::json line = recognition_json(r);
+          line["frame"] = recognized - 1;
+          line["time_s"] = t_s;
+          line["frame_ms"] = ms;
+          line["received"] = mailbox.delivered();
+          line["dropped"] = mailbox.dropped();
+          fmt::print("{}\n", line.dump());
+        } else {
+          fmt::print("frame {} at {:.2f} s, {:.1f} ms: {}\n", recognized - 1, t_s, ms, one_line(r));
+        }
+        std::fflush(stdout);
+      }
+    } catch (...) {
+      g_stop = true;
+      camera.join();
+      std::signal(SIGINT, SIG_DFL);
+      std::signal(SIGTERM, SIG_DFL);
+      throw;
+    }
+    const bool interrupted = g_stop;
+    g_stop = true;  // the camera thread ends within its 100 ms wait
+    camera.join();
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+    if (recorder) recorder->flush();
+    if (camera_error) std::rethrow_exception(camera_error);
+
+    const double seconds = ms_since(start) / 1000.0;
+    const std::uint64_t received = mailbox.delivered(), dropped = mailbox.dropped();
+    const char* why = interrupted ? "stopped" : source_ended ? "the recording ended" : "done";
+    fmt::print(stderr, "live: {} after {:.1f} s: {} frames received ({:.1f} a second), {} recognized ({:.1f} a second), {} dropped{}\n",
+               why, seconds, received, seconds > 0 ? static_cast<double>(received) / seconds : 0.0, recognized,
+               seconds > 0 ? static_cast<double>(recognized) / seconds : 0.0, dropped,
+               recorder ? fmt::format("; recorded {} frames in {}", recorder->frames(), o->record) : std::string());
+    exit_code = 0;
+  });
+}
+
+}  // namespace viewpose::cli
