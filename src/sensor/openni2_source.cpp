@@ -61,8 +61,11 @@ class OpenNi2Source final : public DepthSource {
     K_.width = mode.getResolutionX();
     K_.height = mode.getResolutionY();
     // A pinhole with the stream's fields of view, centred: OpenNI2 reports no other calibration.
-    K_.fx = 0.5 * K_.width / std::tan(0.5 * stream_.getHorizontalFieldOfView());
-    K_.fy = 0.5 * K_.height / std::tan(0.5 * stream_.getVerticalFieldOfView());
+    // A device that reports none gets the nominal Kinect / Xtion focal length at its resolution.
+    const double hfov = stream_.getHorizontalFieldOfView(), vfov = stream_.getVerticalFieldOfView();
+    const bool fov_known = hfov > 0.1 && hfov < 3.0 && vfov > 0.1 && vfov < 3.0;
+    K_.fx = fov_known ? 0.5 * K_.width / std::tan(0.5 * hfov) : 525.0 * K_.width / 640.0;
+    K_.fy = fov_known ? 0.5 * K_.height / std::tan(0.5 * vfov) : 525.0 * K_.width / 640.0;
     K_.cx = 0.5 * (K_.width - 1);
     K_.cy = 0.5 * (K_.height - 1);
     if (stream_.start() != openni::STATUS_OK) {

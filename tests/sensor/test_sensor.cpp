@@ -142,11 +142,10 @@ TEST(DepthSources, SayWhatIsWrongInOneLine) {
   EXPECT_NE(message("freenect:abc").find("must be a number"), std::string::npos);
   test::TempDir empty;
   EXPECT_NE(message("recording:" + empty.path().string()).find("no scene_camera.json"), std::string::npos);
+  // (Opening a camera through its driver is tested in test_camera_drivers.cpp, a program of its
+  // own: the driver libraries keep memory to the end, which the leak checker must not count here.)
   const std::vector<std::string> backends = camera_backends();
-  if (std::find(backends.begin(), backends.end(), "openni2") != backends.end()) {
-    // Through the real OpenNI2 library: a recording that is not there.
-    EXPECT_NE(message("openni2:/no/such/file.oni").find("cannot open '/no/such/file.oni'"), std::string::npos);
-  } else {
+  if (std::find(backends.begin(), backends.end(), "openni2") == backends.end()) {
     EXPECT_NE(message("openni2").find("no OpenNI2 support"), std::string::npos);
   }
   if (std::find(backends.begin(), backends.end(), "freenect") == backends.end()) {
