@@ -51,7 +51,7 @@ void add_live_command(CLI::App& app, int& exit_code) {
     CameraFlags camera;
     bool json_lines = false, no_split = false;
     int frames = 0;
-    double seconds = 0;
+    double seconds = 0, stall_seconds = 5;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("live", "Recognize objects in a depth camera's stream, frame after frame");
@@ -66,8 +66,21 @@ void add_live_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--frames", o->frames, "Stop after recognizing this many frames (default: until Ctrl-C or the recording ends)")
       ->check(CLI::Range(0, 1 << 30));
   cmd->add_option("--seconds", o->seconds, "Stop after this many seconds")->check(CLI::Range(0.0, 1e7));
+  cmd->add_option("--stall-seconds", o->stall_seconds, "A camera that sends no frame for this long is an error")
+      ->check(CLI::Range(0.1, 3600.0))
+      ->capture_default_str();
   cmd->add_flag("--no-split", o->no_split, "Do not split clusters in which nothing is found (faster)");
   cmd->callback([o, &exit_code] {
+    // From the start: a Ctrl-C while the database loads or the camera opens also ends cleanly.
+    g_stop = false;
+    std::signal(SIGINT, on_stop_signal);
+    std::signal(SIGTERM, on_stop_signal);
+    struct RestoreSignals {
+      ~RestoreSignals() {
+        std::signal(SIGINT, SIG_DFL);
+        std::signal(SIGTERM, SIG_DFL);
+      }
+    } restore_signals;
     const ViewDatabase db = ViewDatabase::load(o->db);
     RecognizerOptions options;
     options.split_touching = !o->no_split;
@@ -87,20 +100,22 @@ void add_live_command(CLI::App& app, int& exit_code) {
     if (!o->record.empty()) recorder = std::make_unique<DepthRecorder>(o->record, K);
     fmt::print(stderr, "live: {} ({}x{}, fx {:.1f}); Ctrl-C to stop\n", source->description(), K.width, K.height, K.fx);
 
-    g_stop = false;
-    std::signal(SIGINT, on_stop_signal);
-    std::signal(SIGTERM, on_stop_signal);
     LatestFrame mailbox;
     std::exception_ptr camera_error;
     bool source_ended = false;
     std::thread camera([&] {
       try {
+        auto last_frame = Clock::now();
         while (!g_stop) {
           std::optional<DepthImage> depth = source->next(std::chrono::milliseconds(100));
           if (!depth) {
             if (source->ended()) break;
+            if (ms_since(last_frame) > 1000.0 * o->stall_seconds) {
+              throw Error(fmt::format("live: no frame from {} for {:.0f} s (unplugged?)", source->description(), o->stall_seconds));
+            }
             continue;
           }
+          last_frame = Clock::now();
           if (recorder) recorder->add(*depth);
           mailbox.put(std::move(*depth));
         }
@@ -144,15 +159,11 @@ void add_live_command(CLI::App& app, int& exit_code) {
     } catch (...) {
       g_stop = true;
       camera.join();
-      std::signal(SIGINT, SIG_DFL);
-      std::signal(SIGTERM, SIG_DFL);
       throw;
     }
     const bool interrupted = g_stop;
     g_stop = true;  // the camera thread ends within its 100 ms wait
     camera.join();
-    std::signal(SIGINT, SIG_DFL);
-    std::signal(SIGTERM, SIG_DFL);
     if (recorder) recorder->flush();
     if (camera_error) std::rethrow_exception(camera_error);
 

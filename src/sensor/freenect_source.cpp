@@ -4,6 +4,7 @@
 #include <sys/time.h>
 
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <vector>
 
@@ -64,7 +65,8 @@ class FreenectSource final : public DepthSource {
       if (left.count() <= 0) return std::nullopt;
       timeval tv{static_cast<time_t>(left.count() / 1000000), static_cast<suseconds_t>(left.count() % 1000000)};
       if (freenect_process_events_timeout(context_, &tv) < 0) {
-        // A recording has run out, or the device is gone.
+        // fakenect's recording has run out; a real Kinect is gone.
+        if (!replaying_) throw Error(fmt::format("freenect: Kinect {} stopped (unplugged?)", index_));
         ended_ = true;
         if (!fresh_) return std::nullopt;
       }
@@ -106,6 +108,7 @@ class FreenectSource final : public DepthSource {
   int width_ = 640, height_ = 480;
   std::vector<std::uint16_t> raw_;
   bool fresh_ = false, ended_ = false;
+  const bool replaying_ = std::getenv("FAKENECT_PATH") != nullptr;  // fakenect in libfreenect's place
 };
 
 }  // namespace
