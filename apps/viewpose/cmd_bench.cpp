@@ -79,6 +79,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   struct Options {
     std::string dataset, split = "test", models_dir = "models", db, json;
     int frames = 100, threads = 0, objects = 1;
+    double deadline_ms = 0;
     bool no_split = false;
   };
   auto o = std::make_shared<Options>();
@@ -100,6 +101,8 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   cmd->add_flag("--no-split", o->no_split, "Do not split clusters in which nothing is found");
+  cmd->add_option("--deadline-ms", o->deadline_ms, "Per frame: stop trying poses after this long (0: no limit)")
+      ->check(CLI::Range(0.0, 1e7));
   cmd->add_option("--json", o->json, "Also write the numbers as JSON to this file");
   cmd->callback([o, &exit_code] {
     if (o->threads > 0) set_thread_count(o->threads);
@@ -134,6 +137,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
     }
     RecognizerOptions options;
     options.split_touching = !o->no_split;
+    options.deadline_ms = o->deadline_ms;
     const auto t_prepare = Clock::now();
     const Recognizer recognizer(db, options);
     const double prepare_ms = ms_since(t_prepare);
@@ -146,7 +150,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                                   {"match", {}}, {"crh", {}},        {"icp", {}},     {"verify", {}},  {"split", {}},
                                   {"total", {}}};
     std::vector<double> hypotheses, per_hypothesis_ms, match_per_region_ms;
-    std::size_t targets = 0, found = 0, found_add = 0, wrong = 0;
+    std::size_t targets = 0, found = 0, found_add = 0, wrong = 0, cut_short = 0;
     std::vector<std::size_t> failed_frames;  // a pose missed or a wrong detection: worth looking at
     {
       ProgressBar bar("bench", frames.size());
@@ -161,6 +165,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                                  t.crh_ms,   t.icp_ms,        t.verify_ms,  t.split_ms,     t.total_ms + frame_ms};
         for (std::size_t s = 0; s < stages.size(); ++s) stages[s].ms.push_back(values[s]);
         hypotheses.push_back(static_cast<double>(r.hypotheses));
+        cut_short += r.cut_short ? 1 : 0;
         if (r.hypotheses > 0) per_hypothesis_ms.push_back((t.icp_ms + t.verify_ms) / static_cast<double>(r.hypotheses));
         if (r.regions > 0) match_per_region_ms.push_back(t.match_ms / static_cast<double>(r.regions));
         // Right: a detection of the same object within ADD-S 10 % of its diameter; anything else is wrong.
@@ -219,6 +224,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       if (!failed_frames.empty())
         fmt::print("frames with a pose missed or wrong (0-based): {}\n", fmt::join(failed_frames, " "));
     }
+    if (o->deadline_ms > 0) fmt::print("frames cut short by the {:.1f} ms deadline: {}\n", o->deadline_ms, cut_short);
     const double rss = peak_rss_mib();
     fmt::print("peak resident memory: {:.0f} MiB\n", rss);
     if (!o->json.empty()) {
@@ -226,7 +232,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                                 {"objects", db.objects.size()}, {"views", db.views.size()},
                                 {"db_build_ms", db_build_ms}, {"prepare_ms", prepare_ms}, {"stages_ms", jstages}, {"fps", fps},
                                 {"hypotheses_median", hyp_med}, {"icp_verify_per_hypothesis_ms", per_hyp}, {"match_per_cluster_ms", match_per_region},
-                                {"targets", targets}, {"right", found}, {"right_add", found_add}, {"wrong", wrong}, {"failed_frames", failed_frames},
+                                {"targets", targets}, {"right", found}, {"right_add", found_add}, {"wrong", wrong}, {"failed_frames", failed_frames}, {"cut_short", cut_short},
                                 {"peak_rss_mib", rss}};
       write_file_atomic(o->json, j.dump(2) + "\n");
     }

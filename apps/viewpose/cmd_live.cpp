@@ -51,7 +51,7 @@ void add_live_command(CLI::App& app, int& exit_code) {
     CameraFlags camera;
     bool json_lines = false, no_split = false;
     int frames = 0;
-    double seconds = 0, stall_seconds = 5;
+    double seconds = 0, stall_seconds = 5, deadline_ms = 0;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("live", "Recognize objects in a depth camera's stream, frame after frame");
@@ -70,6 +70,9 @@ void add_live_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
   cmd->add_flag("--no-split", o->no_split, "Do not split clusters in which nothing is found (faster)");
+  cmd->add_option("--deadline-ms", o->deadline_ms,
+                  "Per frame: stop trying poses after this long and report what is verified, marked cut short (0: no limit)")
+      ->check(CLI::Range(0.0, 1e7));
   cmd->callback([o, &exit_code] {
     // From the start: a Ctrl-C while the database loads or the camera opens also ends cleanly.
     g_stop = false;
@@ -84,6 +87,7 @@ void add_live_command(CLI::App& app, int& exit_code) {
     const ViewDatabase db = ViewDatabase::load(o->db);
     RecognizerOptions options;
     options.split_touching = !o->no_split;
+    options.deadline_ms = o->deadline_ms;
     const Recognizer recognizer(db, options);
     const std::unique_ptr<DepthSource> source = open_depth_source(o->source);
     CameraIntrinsics K = source->intrinsics();
@@ -152,7 +156,8 @@ void add_live_command(CLI::App& app, int& exit_code) {
           line["dropped"] = mailbox.dropped();
           fmt::print("{}\n", line.dump());
         } else {
-          fmt::print("frame {} at {:.2f} s, {:.1f} ms: {}\n", recognized - 1, t_s, ms, one_line(r));
+          fmt::print("frame {} at {:.2f} s, {:.1f} ms: {}{}\n", recognized - 1, t_s, ms, one_line(r),
+                     r.cut_short ? " (cut short)" : "");
         }
         std::fflush(stdout);
       }

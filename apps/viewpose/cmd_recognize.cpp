@@ -31,18 +31,23 @@ struct RecognizeFlags {
   bool keep_best = false;
   bool no_split = false;
   std::size_t matches = 20;
+  double deadline_ms = 0;
   void add_to(CLI::App& cmd) {
     cmd.add_option("--db", db, "View database (viewpose db build)")->required()->check(CLI::ExistingFile);
     cmd.add_flag("--keep-best", keep_best, "Try every hypothesis and keep the best, not the first that passes");
     cmd.add_flag("--no-split", no_split,
                  "Do not split clusters in which nothing is found at concave creases (touching objects); faster");
     cmd.add_option("--matches", matches, "Nearest views tried per cluster")->check(CLI::Range(1, 1000))->capture_default_str();
+    cmd.add_option("--deadline-ms", deadline_ms,
+                   "Stop trying poses after this long per frame and report what is verified, marked cut short (0: no limit)")
+        ->check(CLI::Range(0.0, 1e7));
   }
   RecognizerOptions options() const {
     RecognizerOptions o;
     o.keep_best = keep_best;
     o.split_touching = !no_split;
     o.matches = matches;
+    o.deadline_ms = deadline_ms;
     return o;
   }
 };
@@ -75,7 +80,7 @@ nlohmann::json recognition_json(const Recognition& r) {
                                       {"unmeasured_fraction", d.verification.unmeasured_fraction}}}});
   }
   const StageTimes& t = r.times;
-  return {{"detections", dets}, {"clusters", r.clusters}, {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses},
+  return {{"detections", dets}, {"cut_short", r.cut_short}, {"clusters", r.clusters}, {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses},
           {"times_ms", {{"downsample", t.downsample_ms}, {"segment", t.segment_ms}, {"normals", t.normals_ms},
                         {"vfh", t.vfh_ms}, {"match", t.match_ms}, {"crh", t.crh_ms}, {"icp", t.icp_ms},
                         {"verify", t.verify_ms}, {"split", t.split_ms}, {"total", t.total_ms}}}};
@@ -91,6 +96,7 @@ void print_recognition(const Recognition& r) {
                "margin {:.2f}, match rank {}\n", d.object_name, d.object_id, t.x(), t.y(), t.z(), ypr.x(), ypr.y(), ypr.z(),
                d.score, d.score - d.runner_up_score, d.match_rank);
   }
+  if (r.cut_short) fmt::print("cut short by the deadline: views, parts or checks were left untried\n");
   const StageTimes& s = r.times;
   fmt::print("time {:.1f} ms: downsample {:.1f}, segment {:.1f}, normals {:.1f}, vfh {:.1f}, match {:.1f}, crh {:.1f}, "
              "icp {:.1f}, verify {:.1f}, split {:.1f}\n", s.total_ms, s.downsample_ms, s.segment_ms, s.normals_ms, s.vfh_ms,

@@ -46,15 +46,24 @@ VerifyModel Recognizer::verify_model(std::uint32_t object) const {
   return {&o.mesh, o.model_points, db_.params.voxel_m, prepared(object).closed_winding};
 }
 
+bool Recognizer::out_of_time(Recognition& out) const {
+  if (options_.deadline_ms > 0 && ms_since(out.started) > options_.deadline_ms) out.cut_short = true;
+  return out.cut_short;
+}
+
 Recognition Recognizer::recognize(const Frame& frame) const {
   const auto start = Clock::now();
   Recognition out;
+  out.started = start;
   SegmentTimes seg_times;
   const Segmentation seg = segment_scene(frame.cloud, options_.segment, &seg_times);
   out.times.downsample_ms = seg_times.downsample_ms;
   out.times.segment_ms = seg_times.planes_ms + seg_times.clusters_ms;
   out.clusters = seg.clusters.size();
-  for (const Cluster& cluster : seg.clusters) recognize_region(cluster_points(seg.points, cluster), frame, out, 0);
+  for (const Cluster& cluster : seg.clusters) {
+    if (out_of_time(out)) break;
+    recognize_region(cluster_points(seg.points, cluster), frame, out, 0);
+  }
   out.times.total_ms = ms_since(start);
   return out;
 }
@@ -77,7 +86,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   // Nothing passed: the region may be objects touching each other. Try its convex parts, largest
   // first. Two objects side by side span at most twice the largest object.
   if (!options_.split_touching || depth >= options_.max_split_depth ||
-      size > options_.max_split_size_factor * largest_diameter_m_) {
+      size > options_.max_split_size_factor * largest_diameter_m_ || out_of_time(out)) {
     return;
   }
   auto t = Clock::now();
@@ -87,6 +96,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   if (parts.empty() || (parts.size() == 1 && parts[0].size() > 0.9 * static_cast<double>(points.size()))) return;
   ++out.split_clusters;
   for (const Cluster& part : parts) {
+    if (out_of_time(out)) return;
     const PointCloud part_points = cluster_points(points, part);
     if (bounding_box(part_points.points).diagonal() > options_.max_cluster_size_factor * largest_diameter_m_) continue;
     std::optional<Detection> det = recognize_cluster(part_points, frame, part_verify, out);
@@ -115,7 +125,10 @@ void Recognizer::recognize_rest(const PointCloud& points, Detection detection, c
     out.times.split_ms += ms_since(t);
   }
   out.detections.push_back(std::move(detection));
-  for (const Cluster& c : rest_clusters) recognize_region(cluster_points(points, c), frame, out, depth + 1);
+  for (const Cluster& c : rest_clusters) {
+    if (out_of_time(out)) return;
+    recognize_region(cluster_points(points, c), frame, out, depth + 1);
+  }
 }
 
 std::vector<char> Recognizer::explained_points(const Detection& detection, const PointCloud& points) const {
@@ -230,6 +243,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
   std::optional<Detection> best;
   std::size_t rank = 0;
   for (; rank < matches.size() && !(best && !options_.keep_best); ++rank) {
+    if (out_of_time(out)) break;
     std::optional<Detection> det = try_view(rank);
     if (det && (!best || det->score > best->score)) best = std::move(det);
   }
@@ -238,14 +252,14 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
     // among the next matches get a few of their nearest views each, and the higher score wins.
     std::vector<std::size_t> tried(db_.objects.size(), 0);
     const std::size_t end = std::min(matches.size(), rank + options_.matches);
-    for (; rank < end; ++rank) {
+    for (; rank < end && !out_of_time(out); ++rank) {
       const std::uint32_t object = db_.views[matches[rank].view].object;
       if (object == best->object_index || tried[object]++ >= options_.challenger_views) continue;
       std::optional<Detection> det = try_view(rank);
       if (det && det->score > best->score) best = std::move(det);
     }
   }
-  if (best && options_.try_half_turns) {
+  if (best && options_.try_half_turns && !out_of_time(out)) {
     // The same pose turned about the object's own axes, each refined and verified.
     const std::uint32_t object_index = best->object_index;
     const DatabaseObject* object = &db_.objects[object_index];

@@ -80,6 +80,11 @@ expect_in("${json}" "\"times_ms\"")
 if(NOT EXISTS "${WORK}/ov.png" OR NOT EXISTS "${WORK}/al.ply")
   message(FATAL_ERROR "recognize did not write the overlay or the aligned cloud")
 endif()
+run(TRUE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json"
+    --deadline-ms 0.000001 --json "${WORK}/late.json")
+expect_in("${OUT}" "cut short by the deadline")
+file(READ "${WORK}/late.json" json)
+expect_in("${json}" "\"cut_short\": true")
 run(FALSE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png")
 expect_in("${ERR}" "needs its camera")
 run(TRUE bop --db "${WORK}/jug.vpdb" --dataset "${WORK}/sim" -o "${WORK}/results.csv")
@@ -125,7 +130,7 @@ if(FAKENECT_DIR)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "live through fakenect failed (${rc}):\n${out}\n${err}")
   endif()
-  expect_in("${out}" "{\"clusters\":1,\"detections\":[{")
+  expect_in("${out}" "{\"clusters\":1,\"cut_short\":false,\"detections\":[{")
   expect_in("${out}" "\"object_name\":\"jug\"")
   expect_in("${err}" "the recording ended")
   expect_in("${err}" "2 recognized")
@@ -161,6 +166,20 @@ run(FALSE live --db "${WORK}/jug.vpdb" --source "recording:${WORK}/no-such-recor
 expect_in("${ERR}" "no-such-recording: no such folder")
 run(FALSE live --db "${WORK}/jug.vpdb" --source kinect2)
 expect_in("${ERR}" "unknown source 'kinect2'")
+
+# A database build killed at any moment (SIGKILL, no chance to clean up) leaves the database that
+# was there whole and readable: the new one goes to a temporary file renamed over it at the end.
+run(TRUE db build can --views 20 -o "${WORK}/kill.vpdb")
+set(objects 1)  # what the file holds: the can, until a build of three gets to the end
+foreach(after 0.2 0.5 0.9 1.4 2.0 3.0)
+  execute_process(COMMAND ${VIEWPOSE} db build jug can mug --views 80 -o "${WORK}/kill.vpdb" TIMEOUT ${after}
+                  RESULT_VARIABLE rc OUTPUT_QUIET ERROR_QUIET)
+  if(rc EQUAL 0)
+    set(objects 3)
+  endif()
+  run(TRUE db info "${WORK}/kill.vpdb")
+  expect_in("${OUT}" "objects:   ${objects}")
+endforeach()
 
 # A scanned view: a cloud of the object alone becomes a database of its own.
 file(REMOVE "${WORK}/scanned.vpdb")

@@ -55,6 +55,32 @@ TEST(Recognize, NoiseFreeJugAtOneMetreWithinFiveMillimetresAndTwoDegrees) {
   }
 }
 
+TEST(Recognize, ADeadlineCutsTheFrameShortAndSaysSo) {
+  SeedExperimentOptions setup;
+  setup.distances_m = {1.0};
+  setup.orientations = 2;
+  const SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, setup, 21);
+  const Frame frame = frame_from_depth(simulate_image(ds, ds.scenes[0].images[1], SensorModel::kinect_v1(), 3).depth, K);
+  const Recognition full = Recognizer(jug_db()).recognize(frame);
+  ASSERT_EQ(full.detections.size(), 1u);
+  EXPECT_FALSE(full.cut_short);
+  RecognizerOptions generous;
+  generous.deadline_ms = 60'000;  // never reached: the same answer
+  const Recognition in_time = Recognizer(jug_db(), generous).recognize(frame);
+  EXPECT_FALSE(in_time.cut_short);
+  ASSERT_EQ(in_time.detections.size(), 1u);
+  EXPECT_TRUE(in_time.detections[0].T_camera_object.isApprox(full.detections[0].T_camera_object));
+  EXPECT_EQ(in_time.hypotheses, full.hypotheses);
+  // Gone before the first cluster is looked at: nothing tried, nothing claimed, and flagged.
+  RecognizerOptions tight;
+  tight.deadline_ms = 1e-6;
+  const Recognition late = Recognizer(jug_db(), tight).recognize(frame);
+  EXPECT_TRUE(late.cut_short);
+  EXPECT_TRUE(late.detections.empty());
+  EXPECT_EQ(late.hypotheses, 0u);
+  EXPECT_EQ(late.clusters, full.clusters) << "segmentation itself always runs";
+}
+
 TEST(Recognize, TheSameFrameGivesTheSameResultOnOneThreadAndOnTwo) {
   // Frames whose right view is far down the matches (a view's rolls refined side by side) and one
   // with two objects: detections, scores and hypothesis counts must not depend on the threads.

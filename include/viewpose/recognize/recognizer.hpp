@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "viewpose/core/stopwatch.hpp"
 #include "viewpose/database/matching.hpp"
 #include "viewpose/database/view_database.hpp"
 #include "viewpose/describe/crh.hpp"
@@ -70,6 +71,11 @@ struct RecognizerOptions {
   double part_max_unmeasured_fraction = 0.3;
   double part_min_inlier_fraction = 0.9;
   double part_min_cluster_explained = 0.9;
+  /// Stop trying poses once the frame has taken this long (0: no limit): what is verified by then
+  /// is returned, and Recognition::cut_short says so. Checked between database views (a view's
+  /// rolls run together), so a frame overruns it by at most one view's refinement, a few ms. A
+  /// pose found in time is kept even if its half-turn check had to be left out.
+  double deadline_ms = 0;
 };
 
 struct Detection {
@@ -103,6 +109,9 @@ struct Recognition {
   std::size_t hypotheses = 0;  ///< poses refined and verified
   std::size_t split_clusters = 0;  ///< clusters in which nothing passed, tried again in convex parts
   std::size_t regions = 0;  ///< clusters, parts and remainders described and matched against the database
+  /// RecognizerOptions::deadline_ms ran out: clusters, views or checks were left untried.
+  bool cut_short = false;
+  Clock::time_point started{};  ///< when recognize() began (the deadline counts from it)
 };
 
 class Recognizer {
@@ -148,6 +157,8 @@ class Recognizer {
   };
   const PreparedObject& prepared(std::uint32_t object) const;
   const IcpTarget& icp_target(std::uint32_t object) const { return *prepared(object).target; }
+  // Past the deadline (and marks `out` cut short): no further views, parts or checks are tried.
+  bool out_of_time(Recognition& out) const;
   // What verification draws of an object.
   VerifyModel verify_model(std::uint32_t object) const;
 
