@@ -88,3 +88,41 @@ results = ("scene_id,im_id,obj_id,score,R,t,time\n1,0,1,0.9,1 0 0 0 1 0 0 0 1,0 
 for kind, doc in enumerate([cam, scene_cam, gt, gt_info, models, results]):
     text = (doc if isinstance(doc, str) else json.dumps(doc)).encode()
     write("depth_png_json", f"kind{kind}", bytes([kind]) + struct.pack("<H", len(text)) + text + depth)
+
+
+# view database (fuzz_view_database): the first byte even = a payload the target wraps in a valid
+# header and checksum, odd = a whole file as written (header checks and the checksum itself).
+def vpdb_payload(objects, views):
+    def s(text):
+        b = text.encode()
+        return struct.pack("<I", len(b)) + b
+
+    def pts(ps):
+        return struct.pack("<I", len(ps)) + b"".join(struct.pack("<3f", *p) for p in ps)
+
+    params = {"camera": {"fx": 525.0, "fy": 525.0, "cx": 319.5, "cy": 239.5, "width": 640, "height": 480},
+              "subdivisions": 1, "distance_m": 1.0, "voxel_m": 0.003, "icp_voxel_m": 0.005, "normal_radius_m": 0.015,
+              "vfh": {"normalize_bins": True, "normalize_distances": False, "size_component": True, "pcl_compatible": True}}
+    out = s(json.dumps(params, separators=(",", ":"))) + struct.pack("<I", len(objects))
+    for oid, name, verts, tris, model in objects:
+        out += struct.pack("<i", oid) + s(name) + struct.pack("<d", 0.1) + pts(verts)
+        out += struct.pack("<I", len(tris)) + b"".join(struct.pack("<3I", *t) for t in tris)
+        out += pts(model) + pts([(0.0, 0.0, 1.0)] * len(model))
+        out += struct.pack("<I", 1) + struct.pack("<12d", -1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1, 0)  # a half turn about z
+        out += struct.pack("<I", 1) + struct.pack("<6d", 0, 0, 0, 0, 1, 0)  # axis z through the origin (interleaved)
+    out += struct.pack("<I", len(views))
+    for obj, view_points in views:
+        out += struct.pack("<I", obj) + struct.pack("<12d", 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0.5)
+        out += struct.pack("<308f", *[(i % 45) / 45.0 for i in range(308)])
+        out += struct.pack("<90f", *[1.0 / (1 + i) for i in range(90)])
+        out += struct.pack("<3f", 0.0, 0.0, 0.5)
+        out += pts(view_points) + pts([(0.0, 0.0, -1.0)] * len(view_points)) + pts(view_points[:2])
+    return out
+
+
+square = [(0.0, 0.0, 0.0), (0.1, 0.0, 0.0), (0.1, 0.1, 0.0), (0.0, 0.1, 0.0)]
+payload = vpdb_payload([(1, "square", square, [(0, 1, 2), (0, 2, 3)], square)], [(0, square), (0, square[:3])])
+write("view_database", "square_payload", b"\x00" + payload)
+header = (b"VPDB\r\n\x1a\n" + struct.pack("<IIQI", 2, 0x01020304, len(payload), zlib.crc32(payload)) + b"\x00" * 4)
+write("view_database", "square_file", b"\x01" + header + payload)
+write("view_database", "empty_payload", b"\x00" + vpdb_payload([], []))

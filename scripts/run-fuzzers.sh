@@ -7,7 +7,7 @@ build=${1:?usage: run-fuzzers.sh BUILD_DIR SECONDS}
 seconds=${2:-60}
 root=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$build/fuzz-artifacts"
-for target in pcd ply depth_png_json; do
+for target in pcd ply depth_png_json view_database; do
   work="$build/fuzz-work/$target"
   mkdir -p "$work"
   echo "fuzz: $target for ${seconds}s"

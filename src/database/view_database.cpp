@@ -2,6 +2,8 @@
 
 #include <zlib.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include <fmt/format.h>
@@ -72,7 +74,10 @@ class Reader {
     const auto n = get<std::uint32_t>();
     need(std::size_t{n} * 12);  // before allocating
     std::vector<Eigen::Vector3f> pts(n);
-    for (auto& p : pts) get_floats(p.data(), 3);
+    for (auto& p : pts) {
+      get_floats(p.data(), 3);
+      if (!p.allFinite()) fail("a point or normal is not a finite number");
+    }
     return pts;
   }
   /// Fails unless `count` records of at least `min_bytes` each can still follow.
@@ -122,6 +127,14 @@ DatabaseParams params_from_json(const std::string& text, const Reader& r) {
     p.describe.vfh.normalize_distances = v.at("normalize_distances").get<bool>();
     p.describe.vfh.size_component = v.at("size_component").get<bool>();
     p.describe.vfh.pcl_compatible = v.at("pcl_compatible").get<bool>();
+    // Values a damaged or hand-made file could hold that would make every later stage misbehave.
+    const auto positive = [](double x, double most) { return std::isfinite(x) && x > 0 && x <= most; };
+    if (!positive(p.camera.fx, 1e5) || !positive(p.camera.fy, 1e5) || !std::isfinite(p.camera.cx) || !std::isfinite(p.camera.cy) ||
+        p.camera.width <= 0 || p.camera.height <= 0 || p.camera.width > 16384 || p.camera.height > 16384 ||
+        p.subdivisions < 0 || p.subdivisions > 6 || !positive(p.distance_m, 1e3) || !positive(p.voxel_m, 1.0) ||
+        !positive(p.icp_voxel_m, 1.0) || !positive(p.describe.normals.radius_m, 1.0)) {
+      r.fail("build parameters are out of range (camera, view sphere, voxel or normal radius)");
+    }
     return p;
   } catch (const nlohmann::json::exception& e) {
     r.fail(fmt::format("build parameters are unreadable: {}", e.what()));
@@ -212,6 +225,7 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
     o.id = r.get<std::int32_t>();
     o.name = r.get_string();
     o.diameter_m = r.get<double>();
+    if (!(std::isfinite(o.diameter_m) && o.diameter_m > 0 && o.diameter_m < 1e3)) r.fail("an object's diameter is out of range");
     o.mesh.vertices = r.get_points();
     const auto n_triangles = r.get<std::uint32_t>();
     r.need_records(n_triangles, 12);
@@ -259,9 +273,17 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
     if (v.object >= db.objects.size()) r.fail("a view names an object that does not exist");
     for (int row = 0; row < 3; ++row)
       for (int c = 0; c < 4; ++c) v.T_view_object(row, c) = r.get<double>();
+    if (!v.T_view_object.matrix().allFinite() ||
+        (v.T_view_object.linear().transpose() * v.T_view_object.linear() - Eigen::Matrix3d::Identity()).norm() > 1e-6) {
+      r.fail("a view's pose is not a rigid motion");
+    }
     r.get_floats(v.vfh.data(), v.vfh.size());
     r.get_floats(v.crh.data(), v.crh.size());
     r.get_floats(v.centroid.data(), 3);
+    const auto finite = [](const auto& values) {
+      return std::all_of(values.begin(), values.end(), [](float x) { return std::isfinite(x); });
+    };
+    if (!finite(v.vfh) || !finite(v.crh) || !v.centroid.allFinite()) r.fail("a view's descriptor is not finite");
     v.points = r.get_points();
     v.normals = r.get_points();
     v.icp_points = r.get_points();

@@ -1,3 +1,5 @@
+#include <zlib.h>
+
 #include <cstring>
 #include <random>
 #include <set>
@@ -104,6 +106,38 @@ TEST(ViewDatabaseTest, DamagedOrForeignFilesAreRefusedWithAClearError) {
                "checksum mismatch");
   test::TempDir dir;
   expect_error([&] { ViewDatabase::load(dir / "missing.vpdb"); }, "missing.vpdb: no such file");
+}
+
+TEST(ViewDatabaseTest, TheFuzzersSeedFileIsADatabaseAndItsDamagedValuesAreRefused) {
+  // fuzz/corpus/view_database/square_file, written by scripts/make-fuzz-seeds.py: a whole file
+  // after the fuzz target's one mode byte. If the script and the format drift apart, the fuzzer
+  // would start from inputs the reader refuses at once.
+  const auto bytes = read_file_bytes(std::filesystem::path(VIEWPOSE_SOURCE_DIR) / "fuzz/corpus/view_database/square_file");
+  ASSERT_GT(bytes.size(), 33u);
+  std::vector<std::uint8_t> file(bytes.begin() + 1, bytes.end());
+  const ViewDatabase db = ViewDatabase::deserialize(file, "square");
+  ASSERT_EQ(db.objects.size(), 1u);
+  EXPECT_EQ(db.objects[0].name, "square");
+  EXPECT_EQ(db.objects[0].symmetries.discrete.size(), 1u);
+  EXPECT_EQ(db.views.size(), 2u);
+  EXPECT_EQ(db.views[1].points.size(), 3u);
+  // A value no build could write, with the checksum made right again: refused, by name.
+  const auto refused = [&](std::size_t offset, float value) {
+    std::vector<std::uint8_t> bad = file;
+    std::memcpy(bad.data() + offset, &value, sizeof value);
+    const auto crc = static_cast<std::uint32_t>(crc32(0, bad.data() + 32, static_cast<uInt>(bad.size() - 32)));
+    std::memcpy(bad.data() + 24, &crc, 4);
+    try {
+      ViewDatabase::deserialize(bad, "bad.vpdb");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  // The last view's last ICP point, and its first VFH bin.
+  EXPECT_NE(refused(file.size() - 4, NAN).find("not a finite number"), std::string::npos);
+  const std::size_t last_view_vfh = file.size() - (4 + 2 * 12) - 2 * (4 + 3 * 12) - 12 - 4 * 90 - 4 * 308;
+  EXPECT_NE(refused(last_view_vfh, INFINITY).find("descriptor is not finite"), std::string::npos);
 }
 
 TEST(Matching, ChiSquaredDistance) {
