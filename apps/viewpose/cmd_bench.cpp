@@ -4,9 +4,11 @@
 // the frames per second; with ground truth also how many poses were right, so that speed is never
 // bought with accuracy unseen.
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -67,6 +69,14 @@ double percentile(std::vector<double> v, double q) {
   return v[lo] + (pos - static_cast<double>(lo)) * (v[hi] - v[lo]);
 }
 
+// Resident memory now (not the peak): what a long run must keep flat.
+double current_rss_mib() {
+  std::ifstream statm("/proc/self/statm");
+  double pages_total = 0, pages_resident = 0;
+  statm >> pages_total >> pages_resident;
+  return pages_resident * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
 double peak_rss_mib() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
@@ -78,7 +88,7 @@ double peak_rss_mib() {
 void add_bench_command(CLI::App& app, int& exit_code) {
   struct Options {
     std::string dataset, split = "test", models_dir = "models", db, json;
-    int frames = 100, threads = 0, objects = 1;
+    int frames = 100, threads = 0, objects = 1, distinct = 0, block = 0;
     double deadline_ms = 0;
     bool no_split = false;
   };
@@ -103,6 +113,12 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-split", o->no_split, "Do not split clusters in which nothing is found");
   cmd->add_option("--deadline-ms", o->deadline_ms, "Per frame: stop trying poses after this long (0: no limit)")
       ->check(CLI::Range(0.0, 1e7));
+  cmd->add_option("--distinct", o->distinct,
+                  "Make only this many distinct frames and cycle through them (a long run without simulating each frame)")
+      ->check(CLI::Range(1, 1000000));
+  cmd->add_option("--block", o->block,
+                  "Report every this many frames: median and p95 time, resident memory (is a long run steady?)")
+      ->check(CLI::Range(1, 1000000));
   cmd->add_option("--json", o->json, "Also write the numbers as JSON to this file");
   cmd->callback([o, &exit_code] {
     if (o->threads > 0) set_thread_count(o->threads);
@@ -116,13 +132,14 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       const auto t = Clock::now();
       db = o->db.empty() ? build_view_database(std::span(&jug, 1), DatabaseParams{}) : ViewDatabase::load(o->db);
       db_build_ms = o->db.empty() ? ms_since(t) : 0;
-      fmt::print(stderr, "simulating {} frames of the jug at 0.75-1.50 m...\n", o->frames);
-      frames = seed_frames(jug, o->frames);
+      fmt::print(stderr, "simulating {} frames of the jug at 0.75-1.50 m...\n", o->distinct > 0 ? std::min(o->distinct, o->frames) : o->frames);
+      frames = seed_frames(jug, o->distinct > 0 ? std::min(o->distinct, o->frames) : o->frames);
       source = "seed experiment (jug, 0.75-1.50 m, simulated Kinect v1)";
     } else {
       db = ViewDatabase::load(o->db);
       const BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
-      const std::size_t n = std::min(ds.images.size(), static_cast<std::size_t>(o->frames));
+      const std::size_t n = std::min(ds.images.size(),
+                                     static_cast<std::size_t>(o->distinct > 0 ? std::min(o->distinct, o->frames) : o->frames));
       for (std::size_t i = 0; i < n; ++i) {
         const BopFrame bf = load_bop_frame(ds.images[i]);
         frames.push_back({bf.depth, bf.K, ds.images[i].gt});
@@ -152,9 +169,13 @@ void add_bench_command(CLI::App& app, int& exit_code) {
     std::vector<double> hypotheses, per_hypothesis_ms, match_per_region_ms;
     std::size_t targets = 0, found = 0, found_add = 0, wrong = 0, cut_short = 0;
     std::vector<std::size_t> failed_frames;  // a pose missed or a wrong detection: worth looking at
+    // With --distinct, --frames runs cycle through the frames made; without, each frame runs once.
+    const std::size_t runs = o->distinct > 0 ? static_cast<std::size_t>(o->frames) : frames.size();
+    nlohmann::json blocks = nlohmann::json::array();
     {
-      ProgressBar bar("bench", frames.size());
-      for (std::size_t i = 0; i < frames.size(); ++i) {
+      ProgressBar bar("bench", runs);
+      for (std::size_t run = 0; run < runs; ++run) {
+        const std::size_t i = run % frames.size();
         DepthImage depth = frames[i].depth;  // as a camera hands over a fresh buffer
         const auto start = Clock::now();
         const Frame frame = frame_from_depth(std::move(depth), frames[i].K);
@@ -189,8 +210,17 @@ void add_bench_command(CLI::App& app, int& exit_code) {
           wrong += right ? 0 : 1;
         }
         const std::size_t right_here = static_cast<std::size_t>(std::count(paired.begin(), paired.end(), 1));
-        if (right_here < frames[i].gt.size() || r.detections.size() > right_here) failed_frames.push_back(i);
-        bar.update(i + 1);
+        if ((right_here < frames[i].gt.size() || r.detections.size() > right_here) && run < frames.size()) failed_frames.push_back(i);
+        bar.update(run + 1);
+        if (o->block > 0 && (run + 1) % static_cast<std::size_t>(o->block) == 0) {
+          const std::vector<double>& all = stages.back().ms;
+          const std::vector<double> last(all.end() - o->block, all.end());
+          const double rss = current_rss_mib();
+          blocks.push_back({{"frames", run + 1}, {"median_ms", percentile(last, 0.5)}, {"p95_ms", percentile(last, 0.95)},
+                            {"max_ms", percentile(last, 1.0)}, {"rss_mib", rss}});
+          fmt::print(stderr, "\rframes {:>7}: median {:.2f} ms, p95 {:.2f} ms, max {:.1f} ms, resident {:.0f} MiB\n", run + 1,
+                     percentile(last, 0.5), percentile(last, 0.95), percentile(last, 1.0), rss);
+        }
       }
     }
     const double total_s = [&] {
@@ -198,8 +228,9 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       for (double v : stages.back().ms) s += v / 1000;
       return s;
     }();
-    const double fps = static_cast<double>(frames.size()) / total_s;
-    fmt::print("{}: {} frames, {} threads, database of {} objects x {} views\n", source, frames.size(), thread_count(),
+    const double fps = static_cast<double>(runs) / total_s;
+    fmt::print("{}: {} frames{}, {} threads, database of {} objects x {} views\n", source, runs,
+               runs > frames.size() ? fmt::format(" ({} distinct, cycled)", frames.size()) : std::string(), thread_count(),
                db.objects.size(), db.views.size());
     if (db_build_ms > 0) fmt::print("database build: {:.0f} ms\n", db_build_ms);
     fmt::print("recognizer made in {:.0f} ms\n", prepare_ms);
@@ -228,7 +259,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
     const double rss = peak_rss_mib();
     fmt::print("peak resident memory: {:.0f} MiB\n", rss);
     if (!o->json.empty()) {
-      const nlohmann::json j = {{"source", source}, {"frames", frames.size()}, {"threads", thread_count()},
+      const nlohmann::json j = {{"source", source}, {"frames", runs}, {"distinct_frames", frames.size()}, {"blocks", blocks}, {"threads", thread_count()},
                                 {"objects", db.objects.size()}, {"views", db.views.size()},
                                 {"db_build_ms", db_build_ms}, {"prepare_ms", prepare_ms}, {"stages_ms", jstages}, {"fps", fps},
                                 {"hypotheses_median", hyp_med}, {"icp_verify_per_hypothesis_ms", per_hyp}, {"match_per_cluster_ms", match_per_region},
