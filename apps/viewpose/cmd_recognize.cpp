@@ -3,6 +3,7 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -159,10 +160,45 @@ void add_recognize_command(CLI::App& app, int& exit_code) {
   });
 }
 
+namespace {
+
+// `viewpose bop`'s record of the images it has finished, beside the results (OUT.progress): BOP19
+// rows cannot say which images had no detection, so the list is kept apart. It is rewritten,
+// atomically, after the results it vouches for, every few images; a run resumed from it drops any
+// row of an image it does not list (written just before an interruption) and does that image again.
+struct BopProgress {
+  std::string dataset, split, db;
+  std::set<std::pair<int, int>> done;  // (scene_id, im_id)
+
+  nlohmann::json to_json() const {
+    nlohmann::json images = nlohmann::json::array();
+    for (const auto& [scene, im] : done) images.push_back({scene, im});
+    return {{"dataset", dataset}, {"split", split}, {"db", db}, {"done", images}};
+  }
+  static BopProgress read(const std::filesystem::path& path) {
+    const auto bytes = read_file_bytes(path, std::size_t{256} << 20);
+    BopProgress p;
+    try {
+      const auto j = nlohmann::json::parse(bytes.begin(), bytes.end());
+      p.dataset = j.at("dataset").get<std::string>();
+      p.split = j.at("split").get<std::string>();
+      p.db = j.at("db").get<std::string>();
+      for (const auto& e : j.at("done")) p.done.insert({e.at(0).get<int>(), e.at(1).get<int>()});
+    } catch (const nlohmann::json::exception& e) {
+      throw Error(fmt::format("{}: not a progress file viewpose bop wrote ({})", path.string(), e.what()));
+    }
+    return p;
+  }
+};
+
+}  // namespace
+
 void add_bop_command(CLI::App& app, int& exit_code) {
   struct Options {
     RecognizeFlags flags;
     std::string dataset, split = "test", out, models_dir = "models", details;
+    bool resume = false;
+    std::size_t images = 0;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("bop", "Run recognition on every image of a BOP dataset split; write BOP19 CSV");
@@ -174,23 +210,75 @@ void add_bop_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--details", o->details,
                   "Also write one JSON line per image: its detections (in the CSV's order, with match rank and "
                   "verification) and per-stage times in ms");
+  cmd->add_flag("--resume", o->resume,
+                "Carry on an interrupted run: keep the images OUT.progress lists as done, do the rest");
+  cmd->add_option("--images", o->images, "Do at most this many images in this run (then --resume does more)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 40));
   cmd->callback([o, &exit_code] {
     const ViewDatabase db = ViewDatabase::load(o->flags.db);
     const BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
     const Recognizer recognizer(db, o->flags.options());
+    const std::filesystem::path progress_path = o->out + ".progress";
+    BopProgress progress{std::filesystem::absolute(o->dataset).lexically_normal().string(), o->split,
+                         std::filesystem::absolute(o->flags.db).lexically_normal().string(), {}};
     std::vector<BopResult> results;
-    std::string details;
-    std::size_t detections = 0;
+    std::vector<std::string> detail_lines;
+    if (o->resume && std::filesystem::exists(progress_path)) {
+      const BopProgress before = BopProgress::read(progress_path);
+      if (before.dataset != progress.dataset || before.split != progress.split || before.db != progress.db) {
+        throw Error(fmt::format("{}: written for {} ({}) with {}, not this run's; start afresh without --resume",
+                                progress_path.string(), before.dataset, before.split, before.db));
+      }
+      progress.done = before.done;
+      // Rows and detail lines of images the progress file vouches for; any other is done again.
+      if (std::filesystem::exists(o->out)) {
+        for (const BopResult& r : read_bop_results(o->out))
+          if (progress.done.count({r.scene_id, r.im_id})) results.push_back(r);
+      }
+      if (!o->details.empty() && std::filesystem::exists(o->details)) {
+        const auto bytes = read_file_bytes(o->details);
+        std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+        while (!text.empty()) {
+          const std::size_t end = text.find('\n');
+          const std::string_view line = text.substr(0, end);
+          text = end == std::string_view::npos ? std::string_view{} : text.substr(end + 1);
+          try {
+            const auto j = nlohmann::json::parse(line);
+            if (progress.done.count({j.at("scene_id").get<int>(), j.at("im_id").get<int>()})) detail_lines.emplace_back(line);
+          } catch (const nlohmann::json::exception&) {
+            // A line cut short by the interruption: its image is done again.
+          }
+        }
+      }
+      fmt::print(stderr, "bop: resuming: {} of {} images already done\n", progress.done.size(), ds.images.size());
+    } else if (o->resume) {
+      fmt::print(stderr, "bop: nothing to resume ({} is absent): starting afresh\n", progress_path.string());
+    }
+    const auto checkpoint = [&] {
+      // Results first, then the list that vouches for them.
+      write_bop_results(o->out, results);
+      if (!o->details.empty()) {
+        std::string text;
+        for (const auto& line : detail_lines) text += line + "\n";
+        write_file_atomic(o->details, text);
+      }
+      write_file_atomic(progress_path, progress.to_json().dump() + "\n");
+    };
+    std::size_t detections = 0, ran = 0;
     double total_ms = 0;
+    auto last_checkpoint = std::chrono::steady_clock::now();
     {
       ProgressBar bar("bop", ds.images.size());
       for (std::size_t i = 0; i < ds.images.size(); ++i) {
         const BopImage& im = ds.images[i];
+        if (progress.done.count({im.scene_id, im.im_id})) continue;
+        if (o->images > 0 && ran >= o->images) break;
         const auto start = std::chrono::steady_clock::now();
         const BopFrame bf = load_bop_frame(im);
         const Recognition r = recognizer.recognize(frame_from_depth(bf.depth, bf.K));
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         total_ms += 1000 * seconds;
+        ++ran;
         for (const Detection& d : r.detections) {
           results.push_back({im.scene_id, im.im_id, d.object_id, d.score, d.T_camera_object, seconds});
           ++detections;
@@ -200,15 +288,28 @@ void add_bop_command(CLI::App& app, int& exit_code) {
           line["scene_id"] = im.scene_id;
           line["im_id"] = im.im_id;
           line["seconds"] = seconds;
-          details += line.dump() + "\n";
+          detail_lines.push_back(line.dump());
+        }
+        progress.done.insert({im.scene_id, im.im_id});
+        // A checkpoint every two seconds: an interruption loses at most that much work.
+        if (std::chrono::steady_clock::now() - last_checkpoint > std::chrono::seconds(2)) {
+          checkpoint();
+          last_checkpoint = std::chrono::steady_clock::now();
         }
         bar.update(i + 1);
       }
     }
-    write_bop_results(o->out, results);
-    if (!o->details.empty()) write_file_atomic(o->details, details);
-    fmt::print("{}: {} detections in {} images, {:.1f} ms per image\n", o->out, detections, ds.images.size(),
-               total_ms / static_cast<double>(std::max<std::size_t>(ds.images.size(), 1)));
+    // The rows in dataset order, whatever order the runs came in.
+    std::stable_sort(results.begin(), results.end(), [](const BopResult& a, const BopResult& b) {
+      return std::pair(a.scene_id, a.im_id) < std::pair(b.scene_id, b.im_id);
+    });
+    checkpoint();
+    const bool complete = progress.done.size() >= ds.images.size();
+    if (complete) std::filesystem::remove(progress_path);  // nothing left to resume
+    fmt::print("{}: {} detections in {} images, {:.1f} ms per image{}\n", o->out, detections, ran,
+               total_ms / static_cast<double>(std::max<std::size_t>(ran, 1)),
+               complete ? std::string()
+                        : fmt::format("; {} of {} images done, --resume does the rest", progress.done.size(), ds.images.size()));
     exit_code = 0;
   });
 }
