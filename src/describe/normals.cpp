@@ -19,6 +19,20 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
+// ThreadSanitizer instruments the resolver that picks a clone, which runs while the program is
+// being loaded, before the sanitizer's runtime exists: the program crashed before main. Under it
+// (gcc's __SANITIZE_THREAD__, clang's __has_feature) only the baseline version is built.
+#if defined(__SANITIZE_THREAD__)
+#define VIEWPOSE_CLONES
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define VIEWPOSE_CLONES
+#endif
+#endif
+#ifndef VIEWPOSE_CLONES
+#define VIEWPOSE_CLONES [[gnu::target_clones("avx2", "default")]]
+#endif
+
 // The count of the candidates within sqrt(r2) of p, and the sums of their offsets from p and of
 // the offsets' products (x, y, z, xx, xy, xz, yy, yz, zz): one branch-free pass with a 0/1 weight
 // from the sign bit of d2 - r2, which vectorizes. Compiled twice, for AVX2 (8 floats at once) and
@@ -27,7 +41,7 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 struct NeighbourSums {
   float v[10];
 };
-[[gnu::target_clones("avx2", "default")]] NeighbourSums neighbour_sums(const float* ax, const float* ay, const float* az,
+VIEWPOSE_CLONES NeighbourSums neighbour_sums(const float* ax, const float* ay, const float* az,
                                                                        std::size_t m, float px, float py, float pz, float r2) {
   float count = 0, sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
 #pragma omp simd reduction(+ : count, sx, sy, sz, sxx, sxy, sxz, syy, syz, szz)
