@@ -6,9 +6,8 @@
 #include <tuple>
 
 #include <Eigen/Eigenvalues>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+
+#include "viewpose/core/threads.hpp"
 
 namespace viewpose {
 
@@ -126,10 +125,7 @@ std::vector<Match> ViewIndex::nearest(const Vfh& query, std::size_t per_object, 
   // at one comparison with the heap's top; then the shares are merged.
   const std::size_t keep = std::min(n, std::max(candidates_, 2 * std::max(total, per_object)));
   using Near = std::pair<float, std::uint32_t>;  // (distance, view): ordered as the ties need
-  int shares = 1;
-#ifdef _OPENMP
-  if (n > 20000) shares = std::max(1, omp_get_max_threads());
-#endif
+  const int shares = n > 20000 ? std::max(1, thread_count()) : 1;
   std::vector<std::vector<Near>> heaps(static_cast<std::size_t>(shares));
 #pragma omp parallel for schedule(static, 1) num_threads(shares) if (shares > 1)
   for (int share = 0; share < shares; ++share) {

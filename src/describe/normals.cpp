@@ -222,9 +222,6 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
       for (std::size_t k = first[static_cast<std::size_t>(a)]; k < first[static_cast<std::size_t>(a) + 1]; ++k) {
         const std::uint32_t i = keyed[k].second;
         const Eigen::Vector3f& p = cloud.points[i];
-        // Sums of the neighbours' offsets from p and of their products, in one branch-free pass
-        // over all candidates with a 0/1 weight (the sign bit of d2 - r2), which vectorizes;
-        // offsets of a few centimetres keep single precision exact enough.
         const float px = p.x(), py = p.y(), pz = p.z();
         const float* ax = cx.data();
         const float* ay = cy.data();

@@ -6,10 +6,8 @@
 #include <random>
 
 #include <Eigen/Eigenvalues>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
+#include "viewpose/core/threads.hpp"
 
 namespace viewpose {
 
@@ -242,10 +240,7 @@ PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o)
   // Every point, not just the sample, is tested against the planes found: in one pass, split
   // into contiguous chunks across threads whose results are joined in order.
   const std::size_t planes = out.removed.size();
-  int chunks = 1;
-#ifdef _OPENMP
-  chunks = omp_get_max_threads();
-#endif
+  const int chunks = std::max(1, thread_count());
   std::vector<std::vector<std::vector<std::uint32_t>>> found(static_cast<std::size_t>(chunks),
                                                              std::vector<std::vector<std::uint32_t>>(planes + 1));
 #pragma omp parallel for schedule(static, 1) num_threads(chunks)

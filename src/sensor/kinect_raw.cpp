@@ -1,5 +1,6 @@
 #include "viewpose/sensor/kinect_raw.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
