@@ -88,7 +88,7 @@ double peak_rss_mib() {
 void add_bench_command(CLI::App& app, int& exit_code) {
   struct Options {
     std::string dataset, split = "test", models_dir = "models", db, json;
-    int frames = 100, threads = 0, objects = 1, distinct = 0, block = 0;
+    int frames = 100, objects = 1, distinct = 0, block = 0;
     double deadline_ms = 0;
     bool no_split = false;
   };
@@ -104,7 +104,6 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--models-dir", o->models_dir, "Folder of models_info.json, under the dataset")->capture_default_str();
   cmd->add_option("--db", o->db, "View database (required with --dataset; default: built from the jug in this run)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--threads", o->threads, "Threads (default: every core)")->check(CLI::Range(1, 256));
   cmd->add_option("--objects", o->objects,
                   "Grow the database to this many objects: copies of its own with reshaped histograms, to measure "
                   "matching and memory at scale (a detection of a copy counts as the original)")
@@ -121,7 +120,6 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 1000000));
   cmd->add_option("--json", o->json, "Also write the numbers as JSON to this file");
   cmd->callback([o, &exit_code] {
-    if (o->threads > 0) set_thread_count(o->threads);
     if (!o->dataset.empty() && o->db.empty()) throw Error("bench: --dataset needs --db");
     ViewDatabase db;
     double db_build_ms = 0;
@@ -229,9 +227,9 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       return s;
     }();
     const double fps = static_cast<double>(runs) / total_s;
-    fmt::print("{}: {} frames{}, {} threads, database of {} objects x {} views\n", source, runs,
+    fmt::print("{}: {} frames{}, {} thread{}, database of {} objects x {} views\n", source, runs,
                runs > frames.size() ? fmt::format(" ({} distinct, cycled)", frames.size()) : std::string(), thread_count(),
-               db.objects.size(), db.views.size());
+               thread_count() == 1 ? "" : "s", db.objects.size(), db.views.size());
     if (db_build_ms > 0) fmt::print("database build: {:.0f} ms\n", db_build_ms);
     fmt::print("recognizer made in {:.0f} ms\n", prepare_ms);
     fmt::print("{:<12} {:>9} {:>9} {:>9} {:>9} {:>9}\n", "stage (ms)", "median", "p90", "p95", "max", "mean");

@@ -33,6 +33,7 @@ struct RecognizeFlags {
   bool no_split = false;
   std::size_t matches = 20;
   double deadline_ms = 0;
+  bool no_times = false;
   void add_to(CLI::App& cmd) {
     cmd.add_option("--db", db, "View database (viewpose db build)")->required()->check(CLI::ExistingFile);
     cmd.add_flag("--keep-best", keep_best, "Try every hypothesis and keep the best, not the first that passes");
@@ -42,6 +43,9 @@ struct RecognizeFlags {
     cmd.add_option("--deadline-ms", deadline_ms,
                    "Stop trying poses after this long per frame and report what is verified, marked cut short (0: no limit)")
         ->check(CLI::Range(0.0, 1e7));
+    cmd.add_flag("--no-times", no_times,
+                 "Write no run times into the output files (a BOP CSV's time is -1, the JSON has none), so that they "
+                 "depend on the inputs alone, byte for byte, whatever the thread count");
   }
   RecognizerOptions options() const {
     RecognizerOptions o;
@@ -62,7 +66,7 @@ Eigen::Vector3d yaw_pitch_roll_deg(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
-nlohmann::json recognition_json(const Recognition& r) {
+nlohmann::json recognition_json(const Recognition& r, bool with_times) {
   nlohmann::json dets = nlohmann::json::array();
   for (const Detection& d : r.detections) {
     const Eigen::Matrix3d R = d.T_camera_object.linear();
@@ -80,11 +84,15 @@ nlohmann::json recognition_json(const Recognition& r) {
                                       {"visible_fraction", d.verification.visible_fraction},
                                       {"unmeasured_fraction", d.verification.unmeasured_fraction}}}});
   }
-  const StageTimes& t = r.times;
-  return {{"detections", dets}, {"cut_short", r.cut_short}, {"clusters", r.clusters}, {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses},
-          {"times_ms", {{"downsample", t.downsample_ms}, {"segment", t.segment_ms}, {"normals", t.normals_ms},
-                        {"vfh", t.vfh_ms}, {"match", t.match_ms}, {"crh", t.crh_ms}, {"icp", t.icp_ms},
-                        {"verify", t.verify_ms}, {"split", t.split_ms}, {"total", t.total_ms}}}};
+  nlohmann::json j = {{"detections", dets}, {"cut_short", r.cut_short}, {"clusters", r.clusters},
+                      {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses}};
+  if (with_times) {
+    const StageTimes& t = r.times;
+    j["times_ms"] = {{"downsample", t.downsample_ms}, {"segment", t.segment_ms}, {"normals", t.normals_ms},
+                     {"vfh", t.vfh_ms}, {"match", t.match_ms}, {"crh", t.crh_ms}, {"icp", t.icp_ms},
+                     {"verify", t.verify_ms}, {"split", t.split_ms}, {"total", t.total_ms}};
+  }
+  return j;
 }
 
 void print_recognition(const Recognition& r) {
@@ -125,7 +133,7 @@ void add_recognize_command(CLI::App& app, int& exit_code) {
     const Recognition r = recognizer.recognize(frame);
     print_recognition(r);
     if (!o->json.empty()) {
-      nlohmann::json j = recognition_json(r);
+      nlohmann::json j = recognition_json(r, !o->flags.no_times);
       j["scene"] = o->scene;
       write_file_atomic(o->json, j.dump(1) + "\n");
     }
@@ -280,14 +288,14 @@ void add_bop_command(CLI::App& app, int& exit_code) {
         total_ms += 1000 * seconds;
         ++ran;
         for (const Detection& d : r.detections) {
-          results.push_back({im.scene_id, im.im_id, d.object_id, d.score, d.T_camera_object, seconds});
+          results.push_back({im.scene_id, im.im_id, d.object_id, d.score, d.T_camera_object, o->flags.no_times ? -1.0 : seconds});
           ++detections;
         }
         if (!o->details.empty()) {
-          nlohmann::json line = recognition_json(r);
+          nlohmann::json line = recognition_json(r, !o->flags.no_times);
           line["scene_id"] = im.scene_id;
           line["im_id"] = im.im_id;
-          line["seconds"] = seconds;
+          if (!o->flags.no_times) line["seconds"] = seconds;
           detail_lines.push_back(line.dump());
         }
         progress.done.insert({im.scene_id, im.im_id});

@@ -1,5 +1,8 @@
 // viewpose: find known objects in one depth frame and estimate their 6-DoF poses from CAD models.
+#include <cerrno>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 
 #include <fmt/format.h>
@@ -8,9 +11,13 @@
 
 #include "commands.hpp"
 #include "viewpose/core/error.hpp"
+#include "viewpose/core/threads.hpp"
 
 int main(int argc, char** argv) {
   // Messages go to stderr so that stdout carries only results.
+  // A write past the file-size limit (ulimit -f) fails with EFBIG, reported like a full disk, instead
+  // of killing the process half way through.
+  std::signal(SIGXFSZ, SIG_IGN);
   auto logger = spdlog::stderr_color_mt("viewpose");
   logger->set_pattern("viewpose: %l: %v");
   spdlog::set_default_logger(logger);
@@ -19,6 +26,11 @@ int main(int argc, char** argv) {
                ": find known objects in one depth frame and estimate their 6-DoF poses from CAD models"};
   app.set_version_flag("--version", std::string(VIEWPOSE_VERSION));
   app.require_subcommand(1);
+  // Accepted before or after the command: `viewpose --threads 1 bop ...` or `viewpose bop ... --threads 1`.
+  app.fallthrough();
+  app.add_option("--threads", "Threads for every parallel stage (default: every core); results do not depend on it")
+      ->check(CLI::Range(1, 1024))
+      ->each([](const std::string& n) { viewpose::set_thread_count(std::stoi(n)); });
   int exit_code = 0;
   viewpose::cli::add_info_command(app, exit_code);
   viewpose::cli::add_demo_command(app, exit_code);
@@ -38,6 +50,11 @@ int main(int argc, char** argv) {
     return 1;
   } catch (const std::exception& e) {
     fmt::print(stderr, "viewpose: error: {}\n", e.what());
+    return 1;
+  }
+  // Results on stdout that did not all arrive (a full disk, a closed pipe) are a failure, not a success.
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    fmt::print(stderr, "viewpose: error: cannot write to standard output: {}\n", std::strerror(errno));
     return 1;
   }
   return exit_code;

@@ -213,6 +213,64 @@ foreach(after 0.2 0.5 0.9 1.4 2.0 3.0)
   expect_in("${OUT}" "objects:   ${objects}")
 endforeach()
 
+# A full disk: the file-size limit (ulimit -f, in blocks of 512 or 1024 bytes) stops a 26 MB build
+# part way; the build says so in one line, exits non-zero and leaves the database that was there.
+execute_process(COMMAND sh -c "ulimit -f 2000 && exec \"$0\" db build jug can mug --views 80 -o \"$1\""
+                        ${VIEWPOSE} "${WORK}/kill.vpdb"
+                RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
+if(rc EQUAL 0)
+  message(FATAL_ERROR "db build past the file-size limit should have failed:\n${err}")
+endif()
+expect_in("${err}" "kill.vpdb: write failed: File too large")
+run(TRUE db info "${WORK}/kill.vpdb")
+expect_in("${OUT}" "objects:   ${objects}")
+# Results on a full stdout are an error, not a silent success.
+execute_process(COMMAND ${VIEWPOSE} db info "${WORK}/kill.vpdb" OUTPUT_FILE /dev/full RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(rc EQUAL 0)
+  message(FATAL_ERROR "db info > /dev/full should have failed")
+endif()
+expect_in("${err}" "viewpose: error: cannot write to standard output: No space left on device")
+
+# A recording killed part way (SIGKILL) replays: it lists only the frames written whole.
+execute_process(COMMAND ${VIEWPOSE} live --db "${WORK}/jug.vpdb" --source "recording:${WORK}/long_rec" --record "${WORK}/killed_rec"
+                TIMEOUT 2 RESULT_VARIABLE rc OUTPUT_QUIET ERROR_QUIET)
+file(READ "${WORK}/killed_rec/scene_camera.json" cameras)
+string(REGEX MATCHALL "cam_K" listed "${cameras}")
+list(LENGTH listed listed)
+if(listed LESS 5)
+  message(FATAL_ERROR "the killed recording lists ${listed} frames; expected at least 5 in two seconds")
+endif()
+run(TRUE live --db "${WORK}/jug.vpdb" --source "recording:${WORK}/killed_rec")
+expect_in("${ERR}" "(${listed} frames)")
+expect_in("${ERR}" ": ${listed} frames received")
+math(EXPR last "${listed} - 1")
+expect_in("${OUT}" "frame ${last} at")
+
+# The same inputs give byte-identical output files whatever the thread count (--no-times: the run
+# times are the only thing that differs between two runs).
+foreach(threads 1 2)
+  run(TRUE --threads ${threads} db build jug can box --views 20 -o "${WORK}/threads${threads}.vpdb")
+  run(TRUE bop --db "${WORK}/threads${threads}.vpdb" --dataset "${WORK}/clutter" -o "${WORK}/threads${threads}.csv"
+      --details "${WORK}/threads${threads}.jsonl" --no-times --threads ${threads})
+  run(TRUE recognize --db "${WORK}/threads${threads}.vpdb" "${WORK}/clutter/test/000001/depth/000001.png"
+      --camera "${WORK}/clutter/camera.json" --json "${WORK}/threads${threads}.json" --no-times --threads ${threads})
+endforeach()
+foreach(ext vpdb csv jsonl json)
+  file(SHA256 "${WORK}/threads1.${ext}" one)
+  file(SHA256 "${WORK}/threads2.${ext}" two)
+  if(NOT one STREQUAL two)
+    message(FATAL_ERROR "threads1.${ext} and threads2.${ext} differ: the thread count changed the output")
+  endif()
+endforeach()
+file(READ "${WORK}/threads1.csv" csv)
+expect_in("${csv}" ",-1\n")
+file(READ "${WORK}/threads1.json" json)
+expect_in("${json}" "\"object_name\"")
+string(FIND "${json}" "times_ms" at)
+if(NOT at EQUAL -1)
+  message(FATAL_ERROR "--no-times wrote times:\n${json}")
+endif()
+
 # A scanned view: a cloud of the object alone becomes a database of its own.
 file(REMOVE "${WORK}/scanned.vpdb")
 run(TRUE db add-view "${WORK}/al.ply" --object scene-and-jug --db "${WORK}/scanned.vpdb")
