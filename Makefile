@@ -3,8 +3,9 @@
 #   make demo           build, then run the main job on data the program makes itself
 #   make test           build and run the whole test suite (ctest)
 #   make test-sanitize  the same suite under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make test-thread    the same suite under ThreadSanitizer (clang, libomp with its Archer tool)
 #   make fuzz           build the libFuzzer targets (clang) and run each for FUZZ_SECONDS
-#   make check          all three, as CI runs them
+#   make check          all four, as CI runs them
 #   make bench          micro-benchmarks of each stage, then the pipeline over 100 frames
 #   make bench-pcl      install PCL, and time the thesis's PCL pipeline beside ours, stage by stage
 #   make results        the thesis's experiment and the real-data check; writes docs/RESULTS.md
@@ -13,9 +14,11 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 FUZZ_SECONDS ?= 60
 PCL_FRAMES ?= 12
 BUILD := build
+# LLVM's OpenMP tool that tells ThreadSanitizer about libomp's barriers and locks (libomp-dev).
+ARCHER = $(firstword $(wildcard /usr/lib/llvm-*/lib/libarcher.so))
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-sanitize fuzz check bench bench-pcl results pcl-fixtures clean
+.PHONY: all deps build demo test test-sanitize test-thread fuzz check bench bench-pcl results pcl-fixtures clean
 
 all: build
 
@@ -37,13 +40,23 @@ test-sanitize: deps
 	@cmake --build build-sanitize -j $(JOBS)
 	@cd build-sanitize && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
 
+# Reports from code that is not instrumented (libomp, the camera drivers) are ignored: see tests/tsan.supp.
+test-thread:
+	@scripts/install-deps.sh build fuzz
+	@test -n "$(ARCHER)" || { echo "test-thread: libarcher.so (libomp-dev) not found"; exit 1; }
+	@CXX=clang++ cmake -S . -B build-thread -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVIEWPOSE_THREAD_SANITIZE=ON -DVIEWPOSE_BENCH=OFF >/dev/null
+	@cmake --build build-thread -j $(JOBS)
+	@cd build-thread && OMP_TOOL_LIBRARIES=$(ARCHER) \
+	  TSAN_OPTIONS="suppressions=$(CURDIR)/tests/tsan.supp ignore_noninstrumented_modules=1 halt_on_error=1 second_deadlock_stack=1" \
+	  ctest --output-on-failure -j $(JOBS)
+
 fuzz:
 	@scripts/install-deps.sh build fuzz
 	@CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVIEWPOSE_FUZZ=ON >/dev/null
 	@cmake --build build-fuzz -j $(JOBS)
 	@scripts/run-fuzzers.sh build-fuzz $(FUZZ_SECONDS)
 
-check: test test-sanitize fuzz
+check: test test-sanitize test-thread fuzz
 
 bench: build
 	@./$(BUILD)/viewpose_bench
@@ -69,4 +82,4 @@ pcl-fixtures: build
 	@./build-pcl/pcl_reference tests/fixtures/jug_view.pcd tests/fixtures/pcl
 
 clean:
-	rm -rf build build-sanitize build-fuzz build-pcl build-pcl-bench demo-out
+	rm -rf build build-sanitize build-thread build-fuzz build-pcl build-pcl-bench demo-out
