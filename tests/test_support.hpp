@@ -116,6 +116,17 @@ inline void expect_same_cloud(const PointCloud& a, const PointCloud& b) {
   EXPECT_EQ(a.labels, b.labels);
 }
 
+/// Runs `f`: the message of the exception it throws, or "no error" when it returns.
+template <typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
 /// Runs `f`, expects a viewpose::Error whose message is one line containing `needle`.
 template <typename F>
 void expect_error(F&& f, std::string_view needle) {

@@ -181,14 +181,26 @@ std::vector<std::uint8_t> ViewDatabase::serialize() const {
     w.put_points(v.normals);
     w.put_points(v.icp_points);
   }
+  return file_from_payload(w.bytes);
+}
+
+namespace {
+// crc32_z takes a size_t length: a payload over 4 GiB is checked whole, not modulo 2^32.
+std::uint32_t payload_crc(std::span<const std::uint8_t> payload) {
+  return static_cast<std::uint32_t>(crc32_z(0, payload.data(), payload.size()));
+}
+}  // namespace
+
+std::vector<std::uint8_t> ViewDatabase::file_from_payload(std::span<const std::uint8_t> payload) {
   Writer file;
+  file.bytes.reserve(kHeaderBytes + payload.size());
   for (char c : kMagic) file.put(c);
   file.put(kFormatVersion);
   file.put(kByteOrderMark);
-  file.put(static_cast<std::uint64_t>(w.bytes.size()));
-  file.put(static_cast<std::uint32_t>(crc32(0, w.bytes.data(), static_cast<uInt>(w.bytes.size()))));
+  file.put(static_cast<std::uint64_t>(payload.size()));
+  file.put(payload_crc(payload));
   file.put(std::uint32_t{0});  // reserved
-  file.bytes.insert(file.bytes.end(), w.bytes.begin(), w.bytes.end());
+  file.bytes.insert(file.bytes.end(), payload.begin(), payload.end());
   return file.bytes;
 }
 
@@ -213,7 +225,7 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
                             bytes.size() - kHeaderBytes));
   }
   const auto payload = bytes.subspan(kHeaderBytes);
-  if (crc32(0, payload.data(), static_cast<uInt>(payload.size())) != crc) header.fail("checksum mismatch: the file is corrupted");
+  if (payload_crc(payload) != crc) header.fail("checksum mismatch: the file is corrupted");
 
   Reader r(payload, name);
   ViewDatabase db;
@@ -295,7 +307,9 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
 
 void ViewDatabase::save(const std::filesystem::path& path) const { write_file_atomic(path, serialize()); }
 
-ViewDatabase ViewDatabase::load(const std::filesystem::path& path) { return deserialize(read_file_bytes(path), path.string()); }
+ViewDatabase ViewDatabase::load(const std::filesystem::path& path) {
+  return deserialize(read_file_bytes(path, kMaxFileBytes), path.string());
+}
 
 int add_captured_view(ViewDatabase& db, const PointCloud& cloud, const std::string& name) {
   if (name.empty()) throw Error("add-view: the object needs a name");

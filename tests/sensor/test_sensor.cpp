@@ -128,14 +128,7 @@ TEST(Recording, ReplaysWhatWasRecordedInOrderAndEnds) {
 }
 
 TEST(DepthSources, SayWhatIsWrongInOneLine) {
-  const auto message = [](const std::string& spec) {
-    try {
-      open_depth_source(spec);
-    } catch (const Error& e) {
-      return std::string(e.what());
-    }
-    return std::string("opened");
-  };
+  const auto message = [](const std::string& spec) { return test::error_of([&] { open_depth_source(spec); }); };
   EXPECT_NE(message("webcam").find("unknown source 'webcam'"), std::string::npos);
   EXPECT_NE(message("recording:").find("needs a folder"), std::string::npos);
   EXPECT_NE(message("recording:/no/such/folder").find("no such folder"), std::string::npos);

@@ -59,6 +59,12 @@ struct ViewDatabase {
   static ViewDatabase load(const std::filesystem::path& path);
   std::vector<std::uint8_t> serialize() const;
   static ViewDatabase deserialize(std::span<const std::uint8_t> bytes, std::string_view name);
+  /// A whole file around a payload: the 32-byte header (magic, format version, byte order, payload
+  /// size, CRC-32 of the payload) and the payload. serialize() writes its payload through this; tests
+  /// and the fuzzer use it to give hand-made payloads a valid header.
+  static std::vector<std::uint8_t> file_from_payload(std::span<const std::uint8_t> payload);
+  /// Databases grow by about 9 MB per object at 80 views; files up to this size are read.
+  static constexpr std::size_t kMaxFileBytes = std::size_t{64} << 30;
 };
 
 /// Renders every object from the view sphere around its bounding-box centre and describes each
