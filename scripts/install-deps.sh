@@ -7,6 +7,7 @@ set -euo pipefail
 build_pkgs=(build-essential cmake pkg-config
             libeigen3-dev libnanoflann-dev libassimp-dev libpng-dev liblzf-dev nlohmann-json3-dev
             libcli11-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev
+            libmeshoptimizer-dev
             libfreenect-dev libopenni2-dev)  # camera back-ends of viewpose live (libfreenect ships fakenect)
 fuzz_pkgs=(clang libclang-rt-dev libomp-dev)  # libFuzzer, sanitizer runtimes and OpenMP for clang
 pcl_pkgs=(libpcl-dev)               # only for the optional side-by-side benchmark

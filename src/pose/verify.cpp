@@ -55,11 +55,19 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
       v1 = std::clamp(static_cast<int>(std::ceil(hi_v)) + pad + 1, v0, H + border);
     }
   }
+  // The step s between judged pixels: 1 unless the window is larger than the pixel budget.
+  const double window_pixels = static_cast<double>(u1 - u0) * static_cast<double>(v1 - v0);
+  const int step = std::max(
+      1, static_cast<int>(std::ceil(std::sqrt(window_pixels / static_cast<double>(std::max<std::size_t>(1, o.max_judged_pixels))))));
+  v.pixel_step = step;
+  // The model drawn on the sampled pixels: sample (xs, ys) is the camera's pixel (u0 + s xs, v0 + s ys).
   CameraIntrinsics Kx = K;
-  Kx.width = std::max(1, u1 - u0);
-  Kx.height = std::max(1, v1 - v0);
-  Kx.cx -= u0;
-  Kx.cy -= v0;
+  Kx.width = std::max(1, (u1 - u0 + step - 1) / step);
+  Kx.height = std::max(1, (v1 - v0 + step - 1) / step);
+  Kx.fx /= step;
+  Kx.fy /= step;
+  Kx.cx = (K.cx - u0) / step;
+  Kx.cy = (K.cy - v0) / step;
   RenderedFrame model;
   if (shape.mesh && !shape.mesh->triangles.empty()) {
     const MeshInstance inst{shape.mesh, T_camera_object};
@@ -70,10 +78,9 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
   } else {
     model = render_points(shape.points, T_camera_object, Kx, shape.point_spacing_m);
   }
-  // Model depth at image pixel (col, row), which may lie outside the image.
-  const auto z_model = [&](int col, int row) -> float {
-    const int x = col - u0, y = row - v0;
-    return (x < 0 || y < 0 || x >= Kx.width || y >= Kx.height) ? NAN : model.depth.at(x, y);
+  // Model depth at sample (xs, ys), which may lie outside the drawn window.
+  const auto z_sample = [&](int xs, int ys) -> float {
+    return (xs < 0 || ys < 0 || xs >= Kx.width || ys >= Kx.height) ? NAN : model.depth.at(xs, ys);
   };
   // Pixels the cluster covers (within the window), each of its points splatted over its voxel's footprint.
   const int cw = std::max(0, std::min(u1, W) - std::max(u0, 0)), ch = std::max(0, std::min(v1, H) - std::max(v0, 0));
@@ -91,24 +98,27 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
       for (int x = std::max(cu0, cu - half); x <= std::min(cu0 + cw - 1, cu + half); ++x) cluster_at(x, y) = 1;
   }
   std::size_t supported = 0;
-  // A pixel within m of the window's edge has a neighbour m away outside the window, where the
+  // A sample within ms of the window's edge has a neighbour ms away outside the window, where the
   // model is not drawn: it cannot be interior. So only the inner window is judged, and its
-  // neighbours are read without bounds checks.
+  // neighbours are read without bounds checks. (The edge test's reach stays at least m camera pixels.)
+  const int ms = step == 1 ? m : std::max(1, (m + step - 1) / step);
   const int stride = Kx.width;
-  for (int y = v0 + m; y < v1 - m; ++y) {
-    const float* row = model.depth.depth_m.data() + static_cast<std::ptrdiff_t>(y - v0) * stride - u0;
-    const float* up = row - static_cast<std::ptrdiff_t>(m) * stride;
-    const float* down = row + static_cast<std::ptrdiff_t>(m) * stride;
+  for (int ys = ms; ys < Kx.height - ms; ++ys) {
+    const int y = v0 + ys * step;
+    const float* row = model.depth.depth_m.data() + static_cast<std::ptrdiff_t>(ys) * stride;
+    const float* up = row - static_cast<std::ptrdiff_t>(ms) * stride;
+    const float* down = row + static_cast<std::ptrdiff_t>(ms) * stride;
     const bool row_in_image = y >= 0 && y < H;
-    for (int x = u0 + m; x < u1 - m; ++x) {
-      const float zm = row[x];
+    for (int xs = ms; xs < Kx.width - ms; ++xs) {
+      const float zm = row[xs];
       if (!std::isfinite(zm)) continue;
       const float tol = depth_tolerance(zm, o);
       // Only pixels well inside the model's outline and away from its own depth steps are judged:
       // edges are where the sensor's lateral noise lives. (A NaN neighbour fails the test.)
-      if (!(std::abs(row[x + m] - zm) <= tol && std::abs(row[x - m] - zm) <= tol && std::abs(up[x] - zm) <= tol &&
-            std::abs(down[x] - zm) <= tol))
+      if (!(std::abs(row[xs + ms] - zm) <= tol && std::abs(row[xs - ms] - zm) <= tol && std::abs(up[xs] - zm) <= tol &&
+            std::abs(down[xs] - zm) <= tol))
         continue;
+      const int x = u0 + xs * step;
       if (!row_in_image || x < 0 || x >= W) {
         ++v.unknown;  // outside the image: not seen
         continue;
@@ -129,6 +139,10 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
       }
     }
   }
+  // Counts in the camera's pixels: each sample stands for s x s of them.
+  const std::size_t area = static_cast<std::size_t>(step) * static_cast<std::size_t>(step);
+  v.inliers *= area, v.conflicts *= area, v.occluded *= area, v.unknown *= area, v.hidden_by_cluster *= area;
+  supported *= area;
   const std::size_t judged = v.inliers + v.conflicts + v.hidden_by_cluster;
   v.inlier_fraction = judged ? static_cast<double>(v.inliers) / static_cast<double>(judged) : 0.0;
   const std::size_t all = judged + v.occluded + v.unknown;
@@ -143,12 +157,13 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
     if (!p.allFinite() || !(p.z() > 0)) continue;
     ++counted;
     const Eigen::Vector2d uv = K.project(p.cast<double>());
-    const int u = nearest_pixel(uv.x()), w = nearest_pixel(uv.y());
+    // The nearest sample, and its neighbours (a camera pixel either way when every pixel is drawn).
+    const int us = nearest_pixel((uv.x() - u0) / step), ws = nearest_pixel((uv.y() - v0) / step);
     const float tol = depth_tolerance(p.z(), o);
     bool hit = false;
     for (int dv = -1; dv <= 1 && !hit; ++dv)
       for (int du = -1; du <= 1 && !hit; ++du) {
-        const float zm = z_model(u + du, w + dv);
+        const float zm = z_sample(us + du, ws + dv);
         hit = std::isfinite(zm) && std::abs(zm - p.z()) <= tol;
       }
     explained += hit ? 1 : 0;

@@ -9,6 +9,7 @@
 
 #include "viewpose/core/error.hpp"
 #include "viewpose/database/matching.hpp"
+#include "viewpose/render/simplify.hpp"
 #include "viewpose/segment/convex_segments.hpp"
 #include "viewpose/segment/voxel_grid.hpp"
 
@@ -36,14 +37,16 @@ const Recognizer::PreparedObject& Recognizer::prepared(std::uint32_t object) con
   std::call_once(p.once, [&] {
     const DatabaseObject& o = db_.objects[object];
     p.target = std::make_unique<IcpTarget>(o.model_points, o.model_normals);
-    p.closed_winding = closed_mesh_winding(o.mesh);
+    p.drawn = options_.verify_mesh_error_m > 0 ? simplify_for_drawing(o.mesh, options_.verify_mesh_error_m) : o.mesh;
+    p.closed_winding = closed_mesh_winding(p.drawn);
   });
   return p;
 }
 
 VerifyModel Recognizer::verify_model(std::uint32_t object) const {
   const DatabaseObject& o = db_.objects[object];
-  return {&o.mesh, o.model_points, db_.params.voxel_m, prepared(object).closed_winding};
+  const PreparedObject& p = prepared(object);
+  return {&p.drawn, o.model_points, db_.params.voxel_m, p.closed_winding};
 }
 
 bool Recognizer::out_of_time(Recognition& out) const {

@@ -36,6 +36,10 @@ struct RecognizerOptions {
   float icp_voxel_m = 0.005f;    ///< the cluster is thinned to this for ICP (thesis: 5 mm)
   IcpOptions icp;
   VerifyOptions verify;
+  /// Verification draws each object's mesh simplified to within this (0: the mesh as it is). CAD and
+  /// scanned meshes hold tens of thousands of triangles where a few hundred draw the same depth to a
+  /// millimetre, a fifth of the smallest depth tolerance; drawing was most of a real frame's time.
+  float verify_mesh_error_m = 0.001f;
   bool keep_best = false;        ///< try every hypothesis, keep the best accepted (slower)
   /// Once a pose of one object passes, each other object among the next `matches` matches tries up
   /// to this many of its views, and the higher verification score wins (0: the first pass stands).
@@ -153,7 +157,8 @@ class Recognizer {
   struct PreparedObject {
     std::once_flag once;
     std::unique_ptr<IcpTarget> target;
-    int closed_winding = 0;  // closed_mesh_winding of its mesh
+    TriangleMesh drawn;      // the mesh verification draws (simplified)
+    int closed_winding = 0;  // closed_mesh_winding of `drawn`
   };
   const PreparedObject& prepared(std::uint32_t object) const;
   const IcpTarget& icp_target(std::uint32_t object) const { return *prepared(object).target; }

@@ -1,0 +1,48 @@
+#include "viewpose/render/simplify.hpp"
+
+#include <meshoptimizer.h>
+
+#include <vector>
+
+namespace viewpose {
+
+TriangleMesh simplify_for_drawing(const TriangleMesh& mesh, float max_error_m) {
+  TriangleMesh out;
+  if (mesh.triangles.empty() || mesh.vertices.empty()) {
+    out.vertices = mesh.vertices;
+    out.triangles = mesh.triangles;
+    return out;
+  }
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "vertices are read as packed floats");
+  const std::size_t index_count = 3 * mesh.triangles.size();
+  const auto* indices = mesh.triangles.front().data();
+  // Weld: one vertex per distinct position.
+  std::vector<unsigned int> remap(mesh.vertices.size());
+  const std::size_t unique = meshopt_generateVertexRemap(remap.data(), indices, index_count, mesh.vertices.data(),
+                                                         mesh.vertices.size(), sizeof(Eigen::Vector3f));
+  std::vector<Eigen::Vector3f> welded(unique);
+  meshopt_remapVertexBuffer(welded.data(), mesh.vertices.data(), mesh.vertices.size(), sizeof(Eigen::Vector3f), remap.data());
+  std::vector<unsigned int> welded_indices(index_count);
+  meshopt_remapIndexBuffer(welded_indices.data(), indices, index_count, remap.data());
+  // Collapse edges until the error would pass the bound (meshoptimizer's error is relative to the
+  // mesh's extent).
+  const float scale = meshopt_simplifyScale(welded.front().data(), welded.size(), sizeof(Eigen::Vector3f));
+  const float relative_error = scale > 0 ? max_error_m / scale : 0.0f;
+  std::vector<unsigned int> simplified(index_count);
+  const std::size_t kept = meshopt_simplify(simplified.data(), welded_indices.data(), index_count, welded.front().data(),
+                                            welded.size(), sizeof(Eigen::Vector3f), 0, relative_error, 0, nullptr);
+  simplified.resize(kept);
+  // Only the vertices still in use, in first-use order.
+  std::vector<unsigned int> compact(welded.size());
+  const std::size_t used = meshopt_optimizeVertexFetchRemap(compact.data(), simplified.data(), simplified.size(), welded.size());
+  out.vertices.resize(used);
+  meshopt_remapVertexBuffer(out.vertices.data(), welded.data(), welded.size(), sizeof(Eigen::Vector3f), compact.data());
+  meshopt_remapIndexBuffer(simplified.data(), simplified.data(), simplified.size(), compact.data());
+  out.triangles.resize(simplified.size() / 3);
+  for (std::size_t t = 0; t < out.triangles.size(); ++t) {
+    out.triangles[t] = {simplified[3 * t], simplified[3 * t + 1], simplified[3 * t + 2]};
+  }
+  return out;
+}
+
+}  // namespace viewpose
