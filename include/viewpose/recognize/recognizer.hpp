@@ -37,9 +37,9 @@ struct RecognizerOptions {
   IcpOptions icp;
   VerifyOptions verify;
   /// Verification draws each object's mesh simplified to within this (0: the mesh as it is). CAD and
-  /// scanned meshes hold tens of thousands of triangles where a few hundred draw the same depth to a
-  /// millimetre, a fifth of the smallest depth tolerance; drawing was most of a real frame's time.
-  float verify_mesh_error_m = 0.001f;
+  /// scanned meshes hold tens of thousands of triangles where a few hundred draw the same depth to
+  /// within 2 mm, two fifths of the smallest depth tolerance; drawing was most of a real frame's time.
+  float verify_mesh_error_m = 0.002f;
   bool keep_best = false;        ///< try every hypothesis, keep the best accepted (slower)
   /// Once a pose of one object passes, each other object among the next `matches` matches tries up
   /// to this many of its views, and the higher verification score wins (0: the first pass stands).
