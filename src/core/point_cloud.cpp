@@ -1,5 +1,10 @@
 #include "viewpose/core/point_cloud.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
@@ -50,6 +55,36 @@ BoundingBox bounding_box(const std::vector<Eigen::Vector3f>& points) {
     if (p.allFinite()) box.extend(p);
   }
   return box;
+}
+
+double core_width(std::span<const Eigen::Vector3f> points, double share) {
+  std::vector<Eigen::Vector3d> finite;
+  finite.reserve(points.size());
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : points) {
+    if (!p.allFinite()) continue;
+    finite.push_back(p.cast<double>());
+    mean += finite.back();
+  }
+  if (finite.size() < 2) return 0.0;
+  mean /= static_cast<double>(finite.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const auto& p : finite) covariance += (p - mean) * (p - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> axes(covariance);
+  // The window of the k nearest-together projections, k = the share (at least 2 points).
+  const auto k = std::clamp<std::size_t>(static_cast<std::size_t>(std::ceil(share * static_cast<double>(finite.size()))), 2,
+                                         finite.size());
+  std::vector<double> along(finite.size());
+  double widest = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Vector3d u = axes.eigenvectors().col(axis);
+    for (std::size_t i = 0; i < finite.size(); ++i) along[i] = u.dot(finite[i]);
+    std::sort(along.begin(), along.end());
+    double shortest = along.back() - along.front();
+    for (std::size_t i = 0; i + k <= along.size(); ++i) shortest = std::min(shortest, along[i + k - 1] - along[i]);
+    widest = std::max(widest, shortest);
+  }
+  return widest;
 }
 
 }  // namespace viewpose

@@ -204,6 +204,15 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
   const std::vector<Match> matches = index_.nearest(d.vfh, options_.matches, options_.max_matches);
   out.times.match_ms += ms_since(t_match);
   const std::vector<Eigen::Vector3f> icp_source = voxel_downsample(d.cloud, options_.icp_voxel_m).points;
+  // Objects whose diameter is below this cannot have min_cluster_explained of the cluster on their
+  // surface (an explained point lies within the depth tolerance, and a pixel or so, of the model).
+  double smallest_diameter = 0;
+  if (options_.skip_objects_too_small && frame.K.fx > 0) {
+    float z_far = 0;
+    for (const auto& p : d.cloud.points) z_far = std::max(z_far, p.z());
+    const double slack = 2.0 * (depth_tolerance(z_far, verify) + 4.0 * z_far / frame.K.fx);
+    smallest_diameter = core_width(d.cloud.points, verify.min_cluster_explained) - slack;
+  }
 
   // The poses one database view gives (one per CRH roll peak), each refined and verified; the
   // first accepted, or with keep_best the best.
@@ -211,6 +220,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
     std::optional<Detection> found;
     const ViewEntry& view = db_.views[matches[rank].view];
     const DatabaseObject& object = db_.objects[view.object];
+    if (object.diameter_m < smallest_diameter) return found;
     const auto t0 = Clock::now();
     const std::vector<float> rolls = crh_roll_angles(view.crh, d.crh, options_.roll);
     out.times.crh_ms += ms_since(t0);

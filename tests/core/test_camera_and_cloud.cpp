@@ -68,6 +68,29 @@ TEST(PointCloud, BoundingBoxSkipsNonFinitePoints) {
   EXPECT_TRUE(bounding_box(std::vector<Eigen::Vector3f>{{nan, nan, nan}}).empty);
 }
 
+TEST(PointCloud, CoreWidthIsTheNarrowestIntervalHoldingTheShareOnTheWidestAxis) {
+  // 1001 points evenly along a 1 m segment, turned: the shortest interval holding 70 % is 0.7 m.
+  const Eigen::Matrix3f R = Eigen::AngleAxisf(0.7f, Eigen::Vector3f(1, 2, 3).normalized()).toRotationMatrix();
+  std::vector<Eigen::Vector3f> line;
+  for (int i = 0; i <= 1000; ++i) line.push_back(R * Eigen::Vector3f(0.001f * static_cast<float>(i), 0, 0) + Eigen::Vector3f(5, -2, 1));
+  EXPECT_NEAR(core_width(line, 0.7), 0.7, 0.002);
+  EXPECT_NEAR(core_width(line, 1.0), 1.0, 1e-4);
+  // A dense 10 cm square with 25 % of the points far off in a line: the outliers widen the box
+  // to a metre, not the core (70 % of the points fit in the square).
+  std::vector<Eigen::Vector3f> patch;
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j) patch.push_back(R * Eigen::Vector3f(0.1f * i / 29.0f, 0.1f * j / 29.0f, 0));
+  for (int i = 0; i < 300; ++i) patch.push_back(R * Eigen::Vector3f(0.2f + 0.003f * static_cast<float>(i), 0.05f, 0));
+  EXPECT_GT(bounding_box(patch).diagonal(), 1.0f);
+  EXPECT_LE(core_width(patch, 0.7), 0.1 + 1e-5);
+  EXPECT_GT(core_width(patch, 0.95), 0.3);
+  // Non-finite points are skipped; fewer than two points have no width.
+  patch.push_back(Eigen::Vector3f::Constant(NAN));
+  EXPECT_LE(core_width(patch, 0.7), 0.1 + 1e-5);
+  EXPECT_EQ(core_width(std::vector<Eigen::Vector3f>{{1, 2, 3}}, 0.7), 0.0);
+  EXPECT_EQ(core_width({}, 0.7), 0.0);
+}
+
 TEST(PointCloud, CheckConsistentCatchesMismatchedAttributes) {
   auto c = test::sample_cloud(4, 3, true, true, true);
   EXPECT_NO_THROW(c.check_consistent());

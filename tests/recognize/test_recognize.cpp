@@ -221,6 +221,28 @@ TEST(Recognize, TwoObjectFrameGivesBothWithTheRightIds) {
   expect_jug_and_can_found(r, f);
 }
 
+TEST(Recognize, ObjectsTooSmallForAClusterAreSkippedWithTheSameResult) {
+  // A large box (no object of the database) beside the jug, and a database of the jug and a can:
+  // the can is too small to explain the box's cluster, so its views are not tried there. Skipping
+  // them must change nothing but the work.
+  const ViewDatabase& db = jug_and_can_db();
+  JugAndCan scene = jug_and_can_scene();
+  scene.ds.objects.push_back({3, "box", make_box_mesh({0.30f, 0.25f, 0.20f})});
+  const double lift = static_cast<double>(bounding_box(make_jug()).min.z()) + 0.10;
+  const Transform box_pose = scene.jug_pose * make_transform(Eigen::Matrix3d::Identity(), {0.35, 0.0, lift});
+  const SimulatedFrame f = simulate_image(scene.ds, SimImage{{{0, scene.jug_pose}, {2, box_pose}}}, SensorModel::kinect_v1(), 3);
+  const Frame frame = frame_from_depth(f.depth, K);
+  RecognizerOptions all;
+  all.skip_objects_too_small = false;
+  const Recognition skipping = Recognizer(db).recognize(frame), trying = Recognizer(db, all).recognize(frame);
+  EXPECT_LT(skipping.hypotheses, trying.hypotheses);
+  ASSERT_EQ(skipping.detections.size(), trying.detections.size());
+  ASSERT_EQ(skipping.detections.size(), 1u);
+  EXPECT_EQ(skipping.detections[0].object_id, 1);
+  EXPECT_TRUE(skipping.detections[0].T_camera_object.matrix() == trying.detections[0].T_camera_object.matrix());
+  EXPECT_EQ(skipping.detections[0].score, trying.detections[0].score);
+}
+
 TEST(Recognize, TouchingObjectsAreBothFound) {
   // The same two objects, the can now standing against the jug's side (3 mm into it, so that the
   // sensor's points join them): one Euclidean cluster. The jug explains enough of it to pass, and

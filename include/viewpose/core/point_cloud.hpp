@@ -3,6 +3,7 @@
 // from: point (u, v) is points[v * width + u], and pixels without a measurement hold NaN.
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include <Eigen/Geometry>  // cross products and rotations are used wherever points are
@@ -43,5 +44,11 @@ struct BoundingBox {
 };
 
 BoundingBox bounding_box(const std::vector<Eigen::Vector3f>& points);
+
+/// The widest, over the points' three principal axes, of the shortest interval holding `share` of
+/// their projections (finite points only; 0 for fewer than two). No ball narrower than this holds
+/// `share` of the points: along any axis, the points in a ball of diameter D project into D.
+/// Outliers beyond the share do not widen it, as they widen a bounding box.
+double core_width(std::span<const Eigen::Vector3f> points, double share);
 
 }  // namespace viewpose
