@@ -170,11 +170,15 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
   }
   v.cluster_explained = counted ? static_cast<double>(explained) / static_cast<double>(counted) : 0.0;
   v.score = v.inlier_fraction * v.cluster_explained;
-  v.accepted = v.inliers >= o.min_inliers && v.inlier_fraction >= o.min_inlier_fraction &&
-               v.conflict_fraction <= o.max_conflict_fraction && v.cluster_explained >= o.min_cluster_explained &&
-               v.model_support >= o.min_model_support && v.visible_fraction >= o.min_visible_fraction &&
-               v.unmeasured_fraction <= o.max_unmeasured_fraction;
+  v.accepted = passes(v, o);
   return v;
+}
+
+bool passes(const Verification& v, const VerifyOptions& o) {
+  return v.inliers >= o.min_inliers && v.inlier_fraction >= o.min_inlier_fraction &&
+         v.conflict_fraction <= o.max_conflict_fraction && v.cluster_explained >= o.min_cluster_explained &&
+         v.model_support >= o.min_model_support && v.visible_fraction >= o.min_visible_fraction &&
+         v.unmeasured_fraction <= o.max_unmeasured_fraction;
 }
 
 }  // namespace viewpose

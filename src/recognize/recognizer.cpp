@@ -214,6 +214,21 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
     smallest_diameter = core_width(d.cloud.points, verify.min_cluster_explained) - slack;
   }
 
+  // A pose turned half a turn about each of the object's own axes (through its box centre).
+  const auto half_turns = [&](const Transform& T_camera_object, std::uint32_t object_index) {
+    const BoundingBox box = bounding_box(db_.objects[object_index].model_points);
+    const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
+    std::vector<Transform> turned;
+    for (int axis = 0; axis < 3; ++axis) {
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
+      turned.push_back(T_camera_object * make_transform(R, centre - R * centre));
+    }
+    return turned;
+  };
+  VerifyOptions near_miss = verify;
+  near_miss.max_conflict_fraction = std::max(verify.max_conflict_fraction, options_.near_miss_conflict_fraction);
+  const bool try_near_misses = options_.try_half_turns && near_miss.max_conflict_fraction > verify.max_conflict_fraction;
+
   // The poses one database view gives (one per CRH roll peak), each refined and verified; the
   // first accepted, or with keep_best the best.
   const auto try_view = [&](std::size_t rank) {
@@ -231,10 +246,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
     // All rolls at once on the threads there are; then taken in order, as one after the other would.
     const std::vector<Refined> refined = refine_and_verify(initial, view.object, icp_source, d.cloud.points, frame, verify,
                                                            out.times);
-    for (std::size_t k = 0; k < refined.size(); ++k) {
-      const Refined& h = refined[k];
-      ++out.hypotheses;
-      if (!h.verified || !h.v.accepted || (found && found->score >= h.v.score)) continue;
+    const auto take = [&](const Refined& h, float roll) {
       Detection det;
       det.object_id = object.id;
       det.object_name = object.name;
@@ -244,11 +256,36 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
       det.icp_fitness = h.icp.fitness;
       det.icp_rmse_m = h.icp.inlier_rmse;
       det.match_rank = static_cast<int>(rank);
-      det.roll_deg = rolls[k];
+      det.roll_deg = roll;
       det.cluster_points = d.cloud.size();
       det.verification = h.v;
       found = det;
+    };
+    const Refined* nearest_miss = nullptr;
+    std::size_t nearest_miss_roll = 0;
+    for (std::size_t k = 0; k < refined.size(); ++k) {
+      const Refined& h = refined[k];
+      ++out.hypotheses;
+      if (!h.verified) continue;
+      if (!h.v.accepted) {
+        if (try_near_misses && passes(h.v, near_miss) && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
+          nearest_miss = &h;
+          nearest_miss_roll = k;
+        }
+        continue;
+      }
+      if (found && found->score >= h.v.score) continue;
+      take(h, rolls[k]);
       if (!options_.keep_best) break;
+    }
+    if (!found && nearest_miss && !out_of_time(out)) {
+      // Nothing passed, but one pose failed only by seeing through it: try it turned about its axes.
+      const std::vector<Refined> turned = refine_and_verify(half_turns(nearest_miss->T_camera_object, view.object),
+                                                            view.object, icp_source, d.cloud.points, frame, verify, out.times);
+      out.hypotheses += turned.size();
+      for (const Refined& h : turned) {
+        if (h.verified && h.v.accepted && (!found || h.v.score > found->score)) take(h, rolls[nearest_miss_roll]);
+      }
     }
     return found;
   };
@@ -275,17 +312,8 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
   if (best && options_.try_half_turns && !out_of_time(out)) {
     // The same pose turned about the object's own axes, each refined and verified.
     const std::uint32_t object_index = best->object_index;
-    const DatabaseObject* object = &db_.objects[object_index];
-    const BoundingBox box = bounding_box(object->model_points);
-    const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
-    std::vector<Transform> initial;
-    for (int axis = 0; axis < 3; ++axis) {
-      // Half a turn about the axis through the box centre, in the object frame.
-      const Eigen::Matrix3d R = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
-      initial.push_back(best->T_camera_object * make_transform(R, centre - R * centre));
-    }
-    const std::vector<Refined> turned = refine_and_verify(initial, object_index, icp_source, d.cloud.points, frame, verify,
-                                                          out.times);
+    const std::vector<Refined> turned = refine_and_verify(half_turns(best->T_camera_object, object_index), object_index,
+                                                          icp_source, d.cloud.points, frame, verify, out.times);
     out.hypotheses += turned.size();
     Detection chosen = *best;
     double runner_up = 0;

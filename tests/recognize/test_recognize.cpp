@@ -137,8 +137,9 @@ TEST(Recognize, NoisySeedExperimentSubsetMeetsAddSWithoutFalsePositives) {
 
 TEST(Regression, SeedExperimentEightOrientationsKeepsItsScores) {
   // Issue 6's regression check: 8 orientations x 5 distances (0.75 to 2.00 m), noisy. Measured at
-  // commit time: ADD-S 40 of 40, ADD 37 of 40, no false positive (docs/RESULTS.md has the full run).
-  // The thresholds sit just below, so a change that loses accuracy fails.
+  // commit time: ADD-S 40 of 40, ADD 40 of 40 (37 before conflicts were held to 5 %), no false
+  // positive (docs/RESULTS.md has the full run). The thresholds sit just below, so a change that
+  // loses accuracy fails.
   const ViewDatabase& db = jug_db();
   const Recognizer recognizer(db);
   SeedExperimentOptions setup;
@@ -162,7 +163,7 @@ TEST(Regression, SeedExperimentEightOrientationsKeepsItsScores) {
   }
   ASSERT_EQ(frames, 40);
   EXPECT_GE(add_s, 39);
-  EXPECT_GE(add, 35);
+  EXPECT_GE(add, 39);
   EXPECT_EQ(false_positives, 0);
 }
 
@@ -313,25 +314,25 @@ TEST(Metrics, AddAndAddSOnKnownOffsets) {
   EXPECT_NEAR(add_s_error(turned, truth, pts), 0.0, 1e-6);
 }
 
-TEST(RealData, YcbvObjectsAreFoundInTheXtionFramesAndNothingWrong) {
-  // Measured: with a database of the three matching BOP models all three are found in both frames
-  // within 5 mm ADD-S. The mug and the foam brick touch and come out of Euclidean clustering as one
-  // cluster; they are found in its convex parts. Asserted just below that: 5 of the 6, and every
-  // detection within ADD-S 10 % of its diameter of a ground truth of its own id.
-  VIEWPOSE_REQUIRE_SHARED_DATA();
+// The two real YCB-Video frames recognized against a database of the BOP meshes `ids`: how many of
+// the six ground-truth poses (three objects, two frames) are found within ADD-S 10 % of the
+// diameter; every detection must be one of them (no false positive), and each frame must give two.
+void expect_ycbv_found(const std::vector<int>& ids, int at_least) {
   const auto dir = test::shared_data() / "ycbv_real_sample";
   const BopDataset ds = open_bop_dataset(dir, "data", {"models_bop_ycbv"});
   const std::map<int, std::string> ycb_names = {{8, "009_gelatin_box"}, {14, "025_mug"}, {21, "061_foam_brick"}};
   std::vector<ObjectModel> models;
-  std::map<int, Transform> bop_to_ycb;  // per object id
-  for (const auto& [id, name] : ycb_names) {
+  for (int id : ids) {
     PlyFile ply = read_ply(ds.model_files.at(id));
     for (auto& v : ply.mesh.vertices) v *= 0.001f;
     ply.mesh.normals.clear();
     models.push_back({id, fmt::format("obj_{:06d}", id), std::move(ply.mesh)});
-    // The ground truth is in the YCB-Video model frame (points.xyz); the BOP mesh is that model
-    // moved so that its bounding box is centred (MANIFEST: a few mm), p_ycb = p_bop + c. In the
-    // mesh's frame the truth is T_camera_ycb * translation(c).
+  }
+  // The ground truth is in the YCB-Video model frame (points.xyz); the BOP mesh is that model moved
+  // so that its bounding box is centred (MANIFEST: a few mm), p_ycb = p_bop + c. In the mesh's frame
+  // the truth is T_camera_ycb * translation(c).
+  std::map<int, Transform> bop_to_ycb;  // per object id
+  for (const auto& [id, name] : ycb_names) {
     std::vector<Eigen::Vector3f> ycb_points;
     std::ifstream in(dir / "models" / name / "points.xyz");
     float x, y, z;
@@ -363,7 +364,23 @@ TEST(RealData, YcbvObjectsAreFoundInTheXtionFramesAndNothingWrong) {
     found += static_cast<int>(found_here.size());
     EXPECT_GE(found_here.size(), 2u) << "image " << im.im_id;
   }
-  EXPECT_GE(found, 5) << "of 6";
+  EXPECT_GE(found, at_least) << "of 6";
+}
+
+TEST(RealData, YcbvObjectsAreFoundInTheXtionFramesAndNothingWrong) {
+  // Measured: with a database of the three matching BOP models all three are found in both frames
+  // within 5 mm ADD-S. The mug and the foam brick touch and come out of Euclidean clustering as one
+  // cluster; they are found in its convex parts. Asserted just below that: 5 of the 6.
+  VIEWPOSE_REQUIRE_SHARED_DATA();
+  expect_ycbv_found({8, 14, 21}, 5);
+}
+
+TEST(RealData, YcbvWithSixObjectsInTheDatabaseAcceptsNothingWrong) {
+  // The three other meshes of the sample too (cracker box, mustard bottle, bleach cleanser), none
+  // of them in view. Measured: the same six poses found and nothing else; before free-space
+  // conflicts were held to 5 % the cracker box was fitted to the keyboard in both frames.
+  VIEWPOSE_REQUIRE_SHARED_DATA();
+  expect_ycbv_found({2, 5, 8, 12, 14, 21}, 5);
 }
 
 TEST(RealData, AScannedMilkCartonIsFoundInTheKinectSceneWithinThreeMillimetres) {

@@ -54,6 +54,10 @@ struct RecognizerOptions {
   /// verified in turn) and keep the best: objects that are nearly symmetric (a jug whose handle is a
   /// small share of its surface) otherwise come out the wrong way round about as often as not.
   bool try_half_turns = true;
+  /// A view's best pose that fails only by its free-space conflicts, with at most this share, is
+  /// most often the object the wrong way round (a jug with its handle behind): its half turns are
+  /// refined and verified at once, before the next view (0: not). With try_half_turns.
+  double near_miss_conflict_fraction = 0.15;
   /// Databases of at most this many objects are prepared for ICP when the recognizer is made (about
   /// 0.1 s an object), so that the first frames run as fast as the rest; larger ones object by
   /// object as scenes suggest them (the first hypotheses of an object then cost a few milliseconds
