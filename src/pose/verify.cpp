@@ -57,8 +57,8 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
   }
   // The step s between judged pixels: 1 unless the window is larger than the pixel budget.
   const double window_pixels = static_cast<double>(u1 - u0) * static_cast<double>(v1 - v0);
-  const int step = std::max(
-      1, static_cast<int>(std::ceil(std::sqrt(window_pixels / static_cast<double>(std::max<std::size_t>(1, o.max_judged_pixels))))));
+  const double budget = static_cast<double>(std::max<std::size_t>(1, o.max_judged_pixels));
+  const int step = std::max(1, static_cast<int>(std::ceil(std::sqrt(window_pixels / budget))));
   v.pixel_step = step;
   // The model drawn on the sampled pixels: sample (xs, ys) is the camera's pixel (u0 + s xs, v0 + s ys).
   CameraIntrinsics Kx = K;
@@ -157,12 +157,15 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
     if (!p.allFinite() || !(p.z() > 0)) continue;
     ++counted;
     const Eigen::Vector2d uv = K.project(p.cast<double>());
-    // The nearest sample, and its neighbours (a camera pixel either way when every pixel is drawn).
+    // The pixels within one of the point's; where every s-th pixel is drawn, the samples within one
+    // (s = 2: two pixels), or from s = 3 on the nearest sample only (within s/2 pixels): the
+    // neighbours of a sample would reach s pixels and more, and explain poses that are off.
     const int us = nearest_pixel((uv.x() - u0) / step), ws = nearest_pixel((uv.y() - v0) / step);
     const float tol = depth_tolerance(p.z(), o);
+    const int reach = step <= 2 ? 1 : 0;
     bool hit = false;
-    for (int dv = -1; dv <= 1 && !hit; ++dv)
-      for (int du = -1; du <= 1 && !hit; ++du) {
+    for (int dv = -reach; dv <= reach && !hit; ++dv)
+      for (int du = -reach; du <= reach && !hit; ++du) {
         const float zm = z_sample(us + du, ws + dv);
         hit = std::isfinite(zm) && std::abs(zm - p.z()) <= tol;
       }

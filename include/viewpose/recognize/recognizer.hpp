@@ -44,8 +44,8 @@ struct RecognizerOptions {
   /// Skip the views of objects too small to explain a cluster: verification wants
   /// verify.min_cluster_explained of its points on the model's surface, and no object can cover
   /// points spread wider than its diameter (plus the depth tolerance and a few pixels each side;
-  /// core_width). Changes no result, only what is tried: on real desk frames, most of the work
-  /// went to keyboards and monitors tried against every small object.
+  /// core_width). Changes no result, only what is tried: a large unknown thing (a box, a monitor)
+  /// is not tried against every small object's views.
   bool skip_objects_too_small = true;
   /// Once a pose of one object passes, each other object among the next `matches` matches tries up
   /// to this many of its views, and the higher verification score wins (0: the first pass stands).
