@@ -125,19 +125,20 @@ void add_bench_command(CLI::App& app, int& exit_code) {
     double db_build_ms = 0;
     std::vector<BenchFrame> frames;
     std::string source;
+    // The frames made (or read): all of them, or with --distinct that many, cycled through.
+    const int to_make = o->distinct > 0 ? std::min(o->distinct, o->frames) : o->frames;
     if (o->dataset.empty()) {
       const ObjectModel jug{1, "jug", make_jug()};
       const auto t = Clock::now();
       db = o->db.empty() ? build_view_database(std::span(&jug, 1), DatabaseParams{}) : ViewDatabase::load(o->db);
       db_build_ms = o->db.empty() ? ms_since(t) : 0;
-      fmt::print(stderr, "simulating {} frames of the jug at 0.75-1.50 m...\n", o->distinct > 0 ? std::min(o->distinct, o->frames) : o->frames);
-      frames = seed_frames(jug, o->distinct > 0 ? std::min(o->distinct, o->frames) : o->frames);
+      fmt::print(stderr, "simulating {} frames of the jug at 0.75-1.50 m...\n", to_make);
+      frames = seed_frames(jug, to_make);
       source = "seed experiment (jug, 0.75-1.50 m, simulated Kinect v1)";
     } else {
       db = ViewDatabase::load(o->db);
       const BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
-      const std::size_t n = std::min(ds.images.size(),
-                                     static_cast<std::size_t>(o->distinct > 0 ? std::min(o->distinct, o->frames) : o->frames));
+      const std::size_t n = std::min(ds.images.size(), static_cast<std::size_t>(to_make));
       for (std::size_t i = 0; i < n; ++i) {
         const BopFrame bf = load_bop_frame(ds.images[i]);
         frames.push_back({bf.depth, bf.K, ds.images[i].gt});

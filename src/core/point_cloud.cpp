@@ -49,7 +49,7 @@ void BoundingBox::extend(const Eigen::Vector3f& p) {
   }
 }
 
-BoundingBox bounding_box(const std::vector<Eigen::Vector3f>& points) {
+BoundingBox bounding_box(std::span<const Eigen::Vector3f> points) {
   BoundingBox box;
   for (const auto& p : points) {
     if (p.allFinite()) box.extend(p);

@@ -34,7 +34,9 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
   constexpr int border = 64;
   int u0 = -border, v0 = -border, u1 = W + border, v1 = H + border;  // window [u0, u1) x [v0, v1)
   {
-    const BoundingBox box = shape.mesh && !shape.mesh->triangles.empty() ? bounding_box(*shape.mesh) : bounding_box(std::vector<Eigen::Vector3f>(shape.points.begin(), shape.points.end()));
+    // (No copy of a scanned model's points for it: this runs once per hypothesis.)
+    const BoundingBox box =
+        shape.mesh && !shape.mesh->triangles.empty() ? bounding_box(*shape.mesh) : bounding_box(shape.points);
     double lo_u = 1e9, lo_v = 1e9, hi_u = -1e9, hi_v = -1e9;
     bool in_front = !box.empty;
     for (int corner = 0; corner < 8 && in_front; ++corner) {

@@ -43,7 +43,7 @@ struct BoundingBox {
   void extend(const Eigen::Vector3f& p);
 };
 
-BoundingBox bounding_box(const std::vector<Eigen::Vector3f>& points);
+BoundingBox bounding_box(std::span<const Eigen::Vector3f> points);
 
 /// The widest, over the points' three principal axes, of the shortest interval holding `share` of
 /// their projections (finite points only; 0 for fewer than two). No ball narrower than this holds
