@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include <Eigen/Eigenvalues>
+
 namespace viewpose {
 
 Transform make_transform(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
@@ -21,6 +23,29 @@ double rotation_difference_deg(const Eigen::Matrix3d& R_a, const Eigen::Matrix3d
 bool is_rotation(const Eigen::Matrix3d& R, double tolerance) {
   return R.allFinite() && (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < tolerance &&
          std::abs(R.determinant() - 1.0) < tolerance;
+}
+
+NearRotation nearest_rotation(const Eigen::Matrix3d& M) {
+  NearRotation out;
+  if (!M.allFinite()) return out;
+  // The polar decomposition M = R P with P = (M^T M)^(1/2): R is the nearest rotation when det M > 0,
+  // and P's eigenvalues, the singular values of M, say how far M is from orthonormal.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(M.transpose() * M);
+  const Eigen::Vector3d lambda = eig.eigenvalues();
+  if (eig.info() != Eigen::Success || !(lambda.minCoeff() > 0)) return out;
+  const Eigen::Vector3d sigma = lambda.cwiseSqrt();
+  out.singular_values = sigma.reverse();  // largest first
+  out.deviation = (sigma.array() - 1.0).abs().maxCoeff();
+  if (M.determinant() < 0) {
+    out.kind = NearRotation::Kind::Reflection;
+  } else if (out.deviation > kMaxRotationRounding) {
+    out.kind = NearRotation::Kind::NotRigid;
+  } else {
+    const Eigen::Matrix3d& V = eig.eigenvectors();
+    out.R = M * V * sigma.cwiseInverse().asDiagonal() * V.transpose();
+    out.kind = NearRotation::Kind::Rotation;
+  }
+  return out;
 }
 
 PointCloud transformed(const PointCloud& cloud, const Transform& T_target_source) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <tuple>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -68,13 +69,42 @@ std::vector<double> numbers(const json& obj, const char* key, std::size_t count,
   return out;
 }
 
-Eigen::Matrix3d rotation(const std::vector<double>& r, const char* key, const Where& w) {
-  Eigen::Matrix3d R;
-  for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = r[static_cast<std::size_t>(i)];
-  // Files store rotations to a few digits; accept small errors and snap to the nearest rotation.
-  if (!is_rotation(R, 1e-3)) w.fail("'{}' is not a rotation matrix", key);
-  return Eigen::Quaterniond(R).normalized().toRotationMatrix();
-}
+// Rotations as files hold them: rounded. Each is taken as its nearest rotation; those off
+// orthonormal by more than a file's last digit are counted, and said once per file.
+struct RotationTally {
+  int adjusted = 0;
+  double worst = 0;
+  std::string worst_where;
+
+  Eigen::Matrix3d take(const std::vector<double>& r, const char* key, const Where& w) {
+    Eigen::Matrix3d M;
+    for (int i = 0; i < 9; ++i) M(i / 3, i % 3) = r[static_cast<std::size_t>(i)];
+    const NearRotation n = nearest_rotation(M);
+    if (n.kind == NearRotation::Kind::Reflection) {
+      w.fail("'{}' is a reflection (determinant {:.3g}), not a rotation", key, M.determinant());
+    }
+    if (n.kind == NearRotation::Kind::NotRigid) {
+      const Eigen::Vector3d& s = n.singular_values;
+      w.fail("'{}' is not a rotation matrix: it is scaled or sheared (singular values {:.4g}, {:.4g}, {:.4g}; "
+             "rounding explains at most {:g} from 1)", key, s[0], s[1], s[2], kMaxRotationRounding);
+    }
+    if (n.deviation > kSilentRotationRounding) {
+      ++adjusted;
+      if (n.deviation > worst) {
+        worst = n.deviation;
+        worst_where = w.path;
+      }
+    }
+    return n.R;
+  }
+
+  void report(std::string_view name, std::vector<std::string>* notes) const {
+    if (!notes || adjusted == 0) return;
+    notes->push_back(fmt::format("{}: {} rotation{} off orthonormal by up to {:.1e} ({} the most), taken as the nearest "
+                                 "rotation{}", name, adjusted, adjusted == 1 ? " is" : "s are", worst, worst_where,
+                                 adjusted == 1 ? "" : "s"));
+  }
+};
 
 int parse_id(const std::string& key, const Where& w) {
   int id = 0;
@@ -139,19 +169,21 @@ SceneCameras parse_scene_camera(std::string_view json_text, std::string_view nam
   return out;
 }
 
-SceneGroundTruth parse_scene_gt(std::string_view json_text, std::string_view name) {
+SceneGroundTruth parse_scene_gt(std::string_view json_text, std::string_view name, std::vector<std::string>* notes) {
   SceneGroundTruth out;
+  RotationTally rotations;
   for_each_id(parse_json(json_text, name), name, "image", [&](int id, const json& list, const Where& w) {
     if (!list.is_array()) w.fail("expected a list of objects");
     auto& poses = out[id];
     for (std::size_t i = 0; i < list.size(); ++i) {
       const Where wi{name, fmt::format("{}, object {}", w.path, i)};
-      const Eigen::Matrix3d R = rotation(numbers(list[i], "cam_R_m2c", 9, wi), "cam_R_m2c", wi);
+      const Eigen::Matrix3d R = rotations.take(numbers(list[i], "cam_R_m2c", 9, wi), "cam_R_m2c", wi);
       const auto t = numbers(list[i], "cam_t_m2c", 3, wi);
       poses.push_back({int_member(list[i], "obj_id", wi),
                        make_transform(R, Eigen::Vector3d(t[0], t[1], t[2]) / 1000.0)});
     }
   });
+  rotations.report(name, notes);
   return out;
 }
 
@@ -179,8 +211,9 @@ SceneGroundTruthInfo parse_scene_gt_info(std::string_view json_text, std::string
   return out;
 }
 
-ModelsInfo parse_models_info(std::string_view json_text, std::string_view name) {
+ModelsInfo parse_models_info(std::string_view json_text, std::string_view name, std::vector<std::string>* notes) {
   ModelsInfo out;
+  RotationTally rotations;
   for_each_id(parse_json(json_text, name), name, "object", [&](int id, const json& v, const Where& w) {
     ModelInfo m;
     m.diameter_m = number_member(v, "diameter", w) / 1000.0;
@@ -194,7 +227,7 @@ ModelsInfo parse_models_info(std::string_view json_text, std::string_view name) 
         if (!s.is_array() || s.size() != 16) w.fail("each discrete symmetry must be 16 numbers");
         std::vector<double> a;
         for (const json& x : s) a.push_back(number(x, "symmetries_discrete", w));
-        const Eigen::Matrix3d R = rotation({a[0], a[1], a[2], a[4], a[5], a[6], a[8], a[9], a[10]}, "symmetries_discrete", w);
+        const Eigen::Matrix3d R = rotations.take({a[0], a[1], a[2], a[4], a[5], a[6], a[8], a[9], a[10]}, "symmetries_discrete", w);
         m.symmetries_discrete.push_back(make_transform(R, Eigen::Vector3d(a[3], a[7], a[11]) / 1000.0));
       }
     }
@@ -211,6 +244,31 @@ ModelsInfo parse_models_info(std::string_view json_text, std::string_view name) 
     }
     out[id] = std::move(m);
   });
+  rotations.report(name, notes);
+  return out;
+}
+
+std::vector<BopTarget> parse_bop_targets(std::string_view json_text, std::string_view name) {
+  const json root = parse_json(json_text, name);
+  if (!root.is_array()) throw Error(fmt::format("{}: expected a list of targets (scene_id, im_id, obj_id, inst_count)", name));
+  std::vector<BopTarget> out;
+  out.reserve(root.size());
+  for (std::size_t i = 0; i < root.size(); ++i) {
+    const Where w{name, fmt::format("target {}", i)};
+    BopTarget t{int_member(root[i], "scene_id", w), int_member(root[i], "im_id", w), int_member(root[i], "obj_id", w),
+                int_member(root[i], "inst_count", w)};
+    if (t.scene_id < 0 || t.im_id < 0 || t.obj_id < 0) w.fail("ids must not be negative");
+    if (t.inst_count < 1) w.fail("inst_count {} is below 1", t.inst_count);
+    out.push_back(t);
+  }
+  const auto key = [](const BopTarget& t) { return std::tuple(t.scene_id, t.im_id, t.obj_id); };
+  std::stable_sort(out.begin(), out.end(), [&](const BopTarget& a, const BopTarget& b) { return key(a) < key(b); });
+  for (std::size_t i = 1; i < out.size(); ++i) {
+    if (key(out[i]) == key(out[i - 1])) {
+      throw Error(fmt::format("{}: object {} is listed twice for scene {}, image {}", name, out[i].obj_id, out[i].scene_id,
+                              out[i].im_id));
+    }
+  }
   return out;
 }
 
@@ -298,6 +356,8 @@ bool all_digits(const std::string& s) {
 
 }  // namespace
 
+std::vector<BopTarget> read_bop_targets(const fs::path& path) { return parse_bop_targets(read_text(path), path.string()); }
+
 BopDataset open_bop_dataset(const fs::path& root, std::string_view split, const BopOpenOptions& options) {
   std::error_code ec;
   if (!fs::is_directory(root, ec)) throw Error(fmt::format("{}: not a directory", root.string()));
@@ -311,7 +371,7 @@ BopDataset open_bop_dataset(const fs::path& root, std::string_view split, const 
   if (const fs::path p = root / "camera.json"; fs::exists(p, ec)) ds.camera = parse_bop_camera(read_text(p), p.string());
   const fs::path models_dir = root / options.models_dir;
   if (const fs::path p = models_dir / "models_info.json"; fs::exists(p, ec)) {
-    ds.models = parse_models_info(read_text(p), p.string());
+    ds.models = parse_models_info(read_text(p), p.string(), &ds.notes);
   }
   if (fs::is_directory(models_dir, ec)) {
     for (const auto& entry : fs::directory_iterator(models_dir)) {
@@ -336,7 +396,7 @@ BopDataset open_bop_dataset(const fs::path& root, std::string_view split, const 
     SceneGroundTruth gt;
     SceneGroundTruthInfo gt_info;
     const fs::path gt_path = dir / "scene_gt.json", info_path = dir / "scene_gt_info.json";
-    if (fs::exists(gt_path, ec)) gt = parse_scene_gt(read_text(gt_path), gt_path.string());
+    if (fs::exists(gt_path, ec)) gt = parse_scene_gt(read_text(gt_path), gt_path.string(), &ds.notes);
     if (fs::exists(info_path, ec)) gt_info = parse_scene_gt_info(read_text(info_path), info_path.string());
     for (const auto& [im_id, poses] : gt) {
       if (!cameras.count(im_id)) {

@@ -27,7 +27,7 @@ std::string format_bop_results(const std::vector<BopResult>& results) {
   return out;
 }
 
-std::vector<BopResult> parse_bop_results(std::string_view csv_text, std::string_view name) {
+std::vector<BopResult> parse_bop_results(std::string_view csv_text, std::string_view name, std::vector<std::string>* notes) {
   const std::span bytes(reinterpret_cast<const std::uint8_t*>(csv_text.data()), csv_text.size());
   text::LineReader lines(bytes);
   std::string_view line;
@@ -35,6 +35,9 @@ std::vector<BopResult> parse_bop_results(std::string_view csv_text, std::string_
     throw Error(fmt::format("{}: not a BOP results file (the first line must be '{}')", name, kHeader));
   }
   std::vector<BopResult> results;
+  int adjusted = 0;
+  double worst = 0;
+  std::size_t worst_line = 0;
   for (std::size_t number = 2; lines.next(line); ++number) {
     if (text::trim(line).empty()) continue;
     const auto fail = [&](std::string_view why) -> void {
@@ -60,10 +63,30 @@ std::vector<BopResult> parse_bop_results(std::string_view csv_text, std::string_
     for (int i = 0; i < 3; ++i) {
       if (!text::parse_number(t_values[static_cast<std::size_t>(i)], t[i])) fail("t holds a non-number");
     }
-    if (!is_rotation(R, 1e-3)) fail("R is not a rotation matrix");
+    const NearRotation near = nearest_rotation(R);
+    if (near.kind == NearRotation::Kind::Reflection) {
+      fail(fmt::format("R is a reflection (determinant {:.3g}), not a rotation", R.determinant()));
+    }
+    if (near.kind == NearRotation::Kind::NotRigid) {
+      const Eigen::Vector3d& s = near.singular_values;
+      fail(fmt::format("R is not a rotation matrix: it is scaled or sheared (singular values {:.4g}, {:.4g}, {:.4g}; "
+                       "rounding explains at most {:g} from 1)", s[0], s[1], s[2], kMaxRotationRounding));
+    }
+    if (near.deviation > kSilentRotationRounding) {
+      ++adjusted;
+      if (near.deviation > worst) {
+        worst = near.deviation;
+        worst_line = number;
+      }
+    }
     if (!t.allFinite()) fail("t is not finite");
-    r.T_camera_object = make_transform(R, t / 1000.0);
+    r.T_camera_object = make_transform(near.R, t / 1000.0);
     results.push_back(r);
+  }
+  if (notes && adjusted > 0) {
+    notes->push_back(fmt::format("{}: {} rotation{} off orthonormal by up to {:.1e} (line {} the most), taken as the "
+                                 "nearest rotation{}", name, adjusted, adjusted == 1 ? " is" : "s are", worst, worst_line,
+                                 adjusted == 1 ? "" : "s"));
   }
   return results;
 }
@@ -72,9 +95,10 @@ void write_bop_results(const std::filesystem::path& path, const std::vector<BopR
   write_file_atomic(path, format_bop_results(results));
 }
 
-std::vector<BopResult> read_bop_results(const std::filesystem::path& path) {
+std::vector<BopResult> read_bop_results(const std::filesystem::path& path, std::vector<std::string>* notes) {
   const auto bytes = read_file_bytes(path);
-  return parse_bop_results(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), path.string());
+  return parse_bop_results(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), path.string(),
+                           notes);
 }
 
 }  // namespace viewpose

@@ -58,6 +58,42 @@ TEST(Transform, RotationDifferenceAndCheck) {
   EXPECT_FALSE(is_rotation(Eigen::Vector3d(1, 1, -1).asDiagonal().toDenseMatrix()));  // a reflection
 }
 
+// Rotations as files hold them: LM-O's ground truth is off orthonormal by up to 2e-3 (rounding to
+// a few digits); a reflection, a scale or a shear is no rounding.
+TEST(Transform, NearRotationsAreTakenAndOthersRefused) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  const NearRotation exact = nearest_rotation(R);
+  EXPECT_EQ(exact.kind, NearRotation::Kind::Rotation);
+  EXPECT_LT(exact.deviation, 1e-12);
+  EXPECT_TRUE(exact.R.isApprox(R, 1e-12));
+
+  // Rounded to three decimals, as an annotation tool might: a rotation with rounding in it.
+  const Eigen::Matrix3d rounded = (R * 1000.0).array().round() / 1000.0;
+  const NearRotation near = nearest_rotation(rounded);
+  ASSERT_EQ(near.kind, NearRotation::Kind::Rotation);
+  EXPECT_GT(near.deviation, kSilentRotationRounding);
+  EXPECT_LT(near.deviation, 2e-3);
+  EXPECT_TRUE(is_rotation(near.R, 1e-12));
+  EXPECT_LT(rotation_difference_deg(near.R, R), 0.1);
+  // A perturbation of 2e-3 off orthonormal (LM-O's worst): still taken.
+  Eigen::Matrix3d off = R;
+  off(0, 1) += 2e-3;
+  EXPECT_EQ(nearest_rotation(off).kind, NearRotation::Kind::Rotation);
+
+  Eigen::Matrix3d mirrored = R;
+  mirrored.col(2) *= -1;
+  EXPECT_EQ(nearest_rotation(mirrored).kind, NearRotation::Kind::Reflection);
+  EXPECT_EQ(nearest_rotation(1.05 * R).kind, NearRotation::Kind::NotRigid);
+  EXPECT_NEAR(nearest_rotation(1.05 * R).deviation, 0.05, 1e-12);
+  Eigen::Matrix3d shear = Eigen::Matrix3d::Identity();
+  shear(0, 1) = 0.1;
+  EXPECT_EQ(nearest_rotation(R * shear).kind, NearRotation::Kind::NotRigid);
+  EXPECT_EQ(nearest_rotation(Eigen::Matrix3d::Zero()).kind, NearRotation::Kind::NotRigid);
+  Eigen::Matrix3d nan = R;
+  nan(1, 1) = std::nan("");
+  EXPECT_EQ(nearest_rotation(nan).kind, NearRotation::Kind::NotRigid);
+}
+
 TEST(Transform, CloudsMovePointsAndTurnNormals) {
   PointCloud c = PointCloud::from_points({{1, 0, 0}, {0, 0, 0}});
   c.normals = {{1, 0, 0}, {0, 0, 1}};

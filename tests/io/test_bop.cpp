@@ -1,6 +1,8 @@
 #include <numbers>
 #include <sstream>
 
+#include <fmt/ranges.h>
+
 #include "test_support.hpp"
 #include "viewpose/core/error.hpp"
 #include "viewpose/io/bop.hpp"
@@ -84,6 +86,77 @@ TEST(BopJson, MalformedFilesAreNamedWithTheEntry) {
                "cam.json: ");
   expect_error([] { parse_models_info("{\"1\": {\"diameter\": -3}}", "m.json"); }, "diameter must be positive");
   expect_error([] { parse_scene_gt_info("{\"1\": [{\"visib_fract\": 1.5}]}", "i.json"); }, "not in 0..1");
+}
+
+// A scene_gt.json entry with the rotation's nine numbers as given.
+std::string gt_entry(const Eigen::Matrix3d& R) {
+  return fmt::format("{{\"0\": [{{\"cam_R_m2c\": [{}], \"cam_t_m2c\": [0, 0, 800], \"obj_id\": 8}}]}}",
+                     fmt::join(std::vector<double>{R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1),
+                                                   R(2, 2)}, ", "));
+}
+
+// LM-O's published ground truth (scene 2, image 3, the driller) is off orthonormal by up to 2e-3;
+// such a rotation is taken as its nearest and said once per file. A reflection, a scaled or a
+// sheared matrix is refused, naming the entry; so in the results CSV.
+TEST(BopJson, RoundedRotationsAreTakenAndSaidOncePerFile) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(2.1, Eigen::Vector3d(0.3, 1, -0.2).normalized()).toRotationMatrix();
+  Eigen::Matrix3d off = R;
+  off(0, 0) += 1.5e-3;
+  off(2, 1) -= 2e-3;
+  std::vector<std::string> notes;
+  const SceneGroundTruth gt = parse_scene_gt(gt_entry(off), "scene_gt.json", &notes);
+  const Eigen::Matrix3d taken = gt.at(0)[0].T_camera_object.linear();
+  EXPECT_TRUE(is_rotation(taken, 1e-12));
+  EXPECT_LT(rotation_difference_deg(taken, R), 0.2);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("scene_gt.json: 1 rotation is off orthonormal by up to"), std::string::npos) << notes[0];
+  EXPECT_NE(notes[0].find("image 0, object 0"), std::string::npos) << notes[0];
+
+  // Six digits, as BOP writes them: silent.
+  notes.clear();
+  const Eigen::Matrix3d six = (R * 1e6).array().round() / 1e6;
+  (void)parse_scene_gt(gt_entry(six), "scene_gt.json", &notes);
+  EXPECT_TRUE(notes.empty());
+
+  Eigen::Matrix3d mirrored = R;
+  mirrored.row(1) *= -1;
+  expect_error([&] { parse_scene_gt(gt_entry(mirrored), "scene_gt.json"); },
+               "scene_gt.json: image 0, object 0: 'cam_R_m2c' is a reflection");
+  expect_error([&] { parse_scene_gt(gt_entry(1.02 * R), "scene_gt.json"); }, "is scaled or sheared");
+  Eigen::Matrix3d shear = Eigen::Matrix3d::Identity();
+  shear(1, 2) = 0.05;
+  expect_error([&] { parse_scene_gt(gt_entry(R * shear), "scene_gt.json"); }, "is scaled or sheared");
+
+  const auto row = [](const Eigen::Matrix3d& M) {
+    return fmt::format("scene_id,im_id,obj_id,score,R,t,time\n2,3,8,0.9,{},1 2 800,0.5\n",
+                       fmt::join(std::vector<double>{M(0, 0), M(0, 1), M(0, 2), M(1, 0), M(1, 1), M(1, 2), M(2, 0), M(2, 1),
+                                                     M(2, 2)}, " "));
+  };
+  notes.clear();
+  const auto results = parse_bop_results(row(off), "r.csv", &notes);
+  EXPECT_TRUE(is_rotation(results.at(0).T_camera_object.linear(), 1e-12));
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("line 2"), std::string::npos) << notes[0];
+  expect_error([&] { parse_bop_results(row(mirrored), "r.csv"); }, "r.csv: line 2: R is a reflection");
+  expect_error([&] { parse_bop_results(row(0.9 * R), "r.csv"); }, "r.csv: line 2: R is not a rotation matrix");
+}
+
+TEST(BopJson, TargetsListObjectsAndCountsPerImage) {
+  const auto targets = parse_bop_targets(R"([{"im_id": 3, "inst_count": 1, "obj_id": 8, "scene_id": 2},
+      {"im_id": 3, "inst_count": 2, "obj_id": 1, "scene_id": 2}, {"im_id": 0, "inst_count": 1, "obj_id": 5, "scene_id": 2}])",
+                                         "t.json");
+  ASSERT_EQ(targets.size(), 3u);
+  EXPECT_EQ(targets[0], (BopTarget{2, 0, 5, 1}));  // sorted by scene, image, object
+  EXPECT_EQ(targets[1], (BopTarget{2, 3, 1, 2}));
+  EXPECT_EQ(targets[2], (BopTarget{2, 3, 8, 1}));
+  expect_error([] { parse_bop_targets("{}", "t.json"); }, "t.json: expected a list of targets");
+  expect_error([] { parse_bop_targets(R"([{"im_id": 3, "obj_id": 8, "scene_id": 2}])", "t.json"); },
+               "t.json: target 0: 'inst_count' is missing");
+  expect_error([] { parse_bop_targets(R"([{"im_id": 3, "inst_count": 0, "obj_id": 8, "scene_id": 2}])", "t.json"); },
+               "inst_count 0 is below 1");
+  expect_error([] { parse_bop_targets(R"([{"im_id": 3, "inst_count": 1, "obj_id": 8, "scene_id": 2},
+                                          {"im_id": 3, "inst_count": 2, "obj_id": 8, "scene_id": 2}])", "t.json"); },
+               "object 8 is listed twice for scene 2, image 3");
 }
 
 // A small dataset on disk: camera.json, a test split with one scene of two images.

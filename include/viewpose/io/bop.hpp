@@ -60,11 +60,32 @@ using ModelsInfo = std::map<int, ModelInfo>;
 
 // Parsers take the JSON text; `name` is used in error messages. Each checks types, counts and
 // values (rotation matrices, positive focal lengths) and throws viewpose::Error naming the entry.
+// Rotations are taken as rounded (core/transform.hpp: nearest_rotation): a matrix off orthonormal
+// by what rounding explains is taken as its nearest rotation, and when that is more than a last
+// digit, one line per file says so in `notes` (when given); a reflection, or a scaled or sheared
+// matrix, is an error.
 BopCamera parse_bop_camera(std::string_view json_text, std::string_view name);
 SceneCameras parse_scene_camera(std::string_view json_text, std::string_view name);
-SceneGroundTruth parse_scene_gt(std::string_view json_text, std::string_view name);
+SceneGroundTruth parse_scene_gt(std::string_view json_text, std::string_view name,
+                                std::vector<std::string>* notes = nullptr);
 SceneGroundTruthInfo parse_scene_gt_info(std::string_view json_text, std::string_view name);
-ModelsInfo parse_models_info(std::string_view json_text, std::string_view name);
+ModelsInfo parse_models_info(std::string_view json_text, std::string_view name,
+                             std::vector<std::string>* notes = nullptr);
+
+/// One entry of a BOP19 targets file (test_targets_bop19.json): in image (scene_id, im_id), find
+/// up to inst_count instances of object obj_id.
+struct BopTarget {
+  int scene_id = 0;
+  ImageId im_id = 0;
+  int obj_id = 0;
+  int inst_count = 1;
+  friend bool operator==(const BopTarget&, const BopTarget&) = default;
+};
+/// A JSON list of {"scene_id", "im_id", "obj_id", "inst_count"}, sorted by scene, image and object.
+/// Throws viewpose::Error for a malformed entry, a count below 1, or the same object listed twice
+/// for one image.
+std::vector<BopTarget> parse_bop_targets(std::string_view json_text, std::string_view name);
+std::vector<BopTarget> read_bop_targets(const std::filesystem::path& path);
 
 std::string format_bop_camera(const BopCamera& camera);
 std::string format_scene_camera(const SceneCameras& cameras);
@@ -89,6 +110,9 @@ struct BopDataset {
   ModelsInfo models;                ///< models_info.json, when the dataset has one
   std::map<int, std::filesystem::path> model_files;  ///< obj_id -> obj_NNNNNN.ply
   std::vector<BopImage> images;     ///< sorted by scene, then image
+  /// What the reader took on trust and a user should hear once (rotations taken as the nearest
+  /// rotation, per file); commands print each line on stderr.
+  std::vector<std::string> notes;
 };
 
 struct BopOpenOptions {

@@ -22,9 +22,13 @@ struct BopResult {
 };
 
 std::string format_bop_results(const std::vector<BopResult>& results);
-std::vector<BopResult> parse_bop_results(std::string_view csv_text, std::string_view name);
+/// Rotations are taken as rounded, as in the BOP json files (io/bop.hpp): the nearest rotation, with
+/// one line in `notes` (when given) if any was off orthonormal by more than a last digit; a
+/// reflection or a scaled or sheared matrix is an error naming the line.
+std::vector<BopResult> parse_bop_results(std::string_view csv_text, std::string_view name,
+                                         std::vector<std::string>* notes = nullptr);
 
 void write_bop_results(const std::filesystem::path& path, const std::vector<BopResult>& results);  // atomic
-std::vector<BopResult> read_bop_results(const std::filesystem::path& path);
+std::vector<BopResult> read_bop_results(const std::filesystem::path& path, std::vector<std::string>* notes = nullptr);
 
 }  // namespace viewpose
