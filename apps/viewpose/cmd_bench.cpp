@@ -138,6 +138,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
     } else {
       db = ViewDatabase::load(o->db);
       const BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
+      for (const auto& note : ds.notes) fmt::print(stderr, "viewpose: note: {}\n", note);
       const std::size_t n = std::min(ds.images.size(), static_cast<std::size_t>(to_make));
       for (std::size_t i = 0; i < n; ++i) {
         const BopFrame bf = load_bop_frame(ds.images[i]);

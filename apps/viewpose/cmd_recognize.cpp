@@ -1,6 +1,7 @@
 // `viewpose recognize` (one scene) and `viewpose bop` (every image of a BOP dataset split).
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <set>
@@ -175,13 +176,13 @@ namespace {
 // atomically, after the results it vouches for, every few images; a run resumed from it drops any
 // row of an image it does not list (written just before an interruption) and does that image again.
 struct BopProgress {
-  std::string dataset, split, db;
+  std::string dataset, split, db, targets;
   std::set<std::pair<int, int>> done;  // (scene_id, im_id)
 
   nlohmann::json to_json() const {
     nlohmann::json images = nlohmann::json::array();
     for (const auto& [scene, im] : done) images.push_back({scene, im});
-    return {{"dataset", dataset}, {"split", split}, {"db", db}, {"done", images}};
+    return {{"dataset", dataset}, {"split", split}, {"db", db}, {"targets", targets}, {"done", images}};
   }
   static BopProgress read(const std::filesystem::path& path) {
     const auto bytes = read_file_bytes(path, std::size_t{256} << 20);
@@ -191,6 +192,7 @@ struct BopProgress {
       p.dataset = j.at("dataset").get<std::string>();
       p.split = j.at("split").get<std::string>();
       p.db = j.at("db").get<std::string>();
+      p.targets = j.value("targets", std::string());
       for (const auto& e : j.at("done")) p.done.insert({e.at(0).get<int>(), e.at(1).get<int>()});
     } catch (const nlohmann::json::exception& e) {
       throw Error(fmt::format("{}: not a progress file viewpose bop wrote ({})", path.string(), e.what()));
@@ -201,10 +203,26 @@ struct BopProgress {
 
 }  // namespace
 
+namespace {
+
+// The BOP19 task's answer for one image: of the objects it names, at most its instance count of
+// each, the highest scores first; the rest dropped.
+void keep_targets(Recognition& r, const std::map<int, int>& inst_count) {
+  std::stable_sort(r.detections.begin(), r.detections.end(),
+                   [](const Detection& a, const Detection& b) { return a.score > b.score; });
+  std::map<int, int> kept;
+  std::erase_if(r.detections, [&](const Detection& d) {
+    const auto it = inst_count.find(d.object_id);
+    return it == inst_count.end() || ++kept[d.object_id] > it->second;
+  });
+}
+
+}  // namespace
+
 void add_bop_command(CLI::App& app, int& exit_code) {
   struct Options {
     RecognizeFlags flags;
-    std::string dataset, split = "test", out, models_dir = "models", details;
+    std::string dataset, split = "test", out, models_dir = "models", details, targets;
     bool resume = false;
     std::size_t images = 0;
   };
@@ -218,24 +236,47 @@ void add_bop_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--details", o->details,
                   "Also write one JSON line per image: its detections (in the CSV's order, with match rank and "
                   "verification) and per-stage times in ms");
+  cmd->add_option("--targets", o->targets,
+                  "BOP19 targets (the dataset's test_targets_bop19.json): do only the images it lists, and report for "
+                  "each only the objects it names, at most its instance count of each, the best first (the BOP19 task). "
+                  "Without it every image, any object, any number")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--resume", o->resume,
                 "Carry on an interrupted run: keep the images OUT.progress lists as done, do the rest");
   cmd->add_option("--images", o->images, "Do at most this many images in this run (then --resume does more)")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 40));
   cmd->callback([o, &exit_code] {
     const ViewDatabase db = ViewDatabase::load(o->flags.db);
-    const BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
+    BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
+    for (const auto& note : ds.notes) fmt::print(stderr, "viewpose: note: {}\n", note);
+    // The BOP19 task: per image, the objects to find and how many of each.
+    std::map<std::pair<int, int>, std::map<int, int>> wanted;
+    if (!o->targets.empty()) {
+      for (const BopTarget& t : read_bop_targets(o->targets)) wanted[{t.scene_id, t.im_id}][t.obj_id] = t.inst_count;
+      std::set<std::pair<int, int>> in_split;
+      for (const BopImage& im : ds.images) in_split.insert({im.scene_id, im.im_id});
+      for (const auto& [image, objects] : wanted) {
+        if (!in_split.count(image)) {
+          throw Error(fmt::format("{}: lists scene {} image {}, which split '{}' does not have", o->targets, image.first,
+                                  image.second, ds.split));
+        }
+      }
+      std::erase_if(ds.images, [&](const BopImage& im) { return !wanted.count({im.scene_id, im.im_id}); });
+    }
     const Recognizer recognizer(db, o->flags.options());
     const std::filesystem::path progress_path = o->out + ".progress";
-    BopProgress progress{std::filesystem::absolute(o->dataset).lexically_normal().string(), o->split,
-                         std::filesystem::absolute(o->flags.db).lexically_normal().string(), {}};
+    BopProgress progress{std::filesystem::absolute(o->dataset).lexically_normal().string(), ds.split,
+                         std::filesystem::absolute(o->flags.db).lexically_normal().string(),
+                         o->targets.empty() ? std::string() : std::filesystem::absolute(o->targets).lexically_normal().string(), {}};
     std::vector<BopResult> results;
     std::vector<std::string> detail_lines;
     if (o->resume && std::filesystem::exists(progress_path)) {
       const BopProgress before = BopProgress::read(progress_path);
-      if (before.dataset != progress.dataset || before.split != progress.split || before.db != progress.db) {
-        throw Error(fmt::format("{}: written for {} ({}) with {}, not this run's; start afresh without --resume",
-                                progress_path.string(), before.dataset, before.split, before.db));
+      if (before.dataset != progress.dataset || before.split != progress.split || before.db != progress.db ||
+          before.targets != progress.targets) {
+        throw Error(fmt::format("{}: written for {} ({}) with {}{}, not this run's; start afresh without --resume",
+                                progress_path.string(), before.dataset, before.split, before.db,
+                                before.targets.empty() ? std::string() : " and targets " + before.targets));
       }
       progress.done = before.done;
       // Rows and detail lines of images the progress file vouches for; any other is done again.
@@ -283,7 +324,8 @@ void add_bop_command(CLI::App& app, int& exit_code) {
         if (o->images > 0 && ran >= o->images) break;
         const auto start = std::chrono::steady_clock::now();
         const BopFrame bf = load_bop_frame(im);
-        const Recognition r = recognizer.recognize(frame_from_depth(bf.depth, bf.K));
+        Recognition r = recognizer.recognize(frame_from_depth(bf.depth, bf.K));
+        if (const auto it = wanted.find({im.scene_id, im.im_id}); it != wanted.end()) keep_targets(r, it->second);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         total_ms += 1000 * seconds;
         ++ran;

@@ -40,6 +40,11 @@ NearRotation nearest_rotation(const Eigen::Matrix3d& M) {
     out.kind = NearRotation::Kind::Reflection;
   } else if (out.deviation > kMaxRotationRounding) {
     out.kind = NearRotation::Kind::NotRigid;
+  } else if (out.deviation < 1e-12) {
+    // Already a rotation to the last bits: kept bit for bit, so that a file read and written again
+    // is unchanged (bop --resume compares rows).
+    out.R = M;
+    out.kind = NearRotation::Kind::Rotation;
   } else {
     const Eigen::Matrix3d& V = eig.eigenvectors();
     out.R = M * V * sigma.cwiseInverse().asDiagonal() * V.transpose();

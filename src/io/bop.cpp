@@ -6,6 +6,7 @@
 #include <tuple>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "viewpose/core/error.hpp"
@@ -358,22 +359,118 @@ bool all_digits(const std::string& s) {
 
 std::vector<BopTarget> read_bop_targets(const fs::path& path) { return parse_bop_targets(read_text(path), path.string()); }
 
-BopDataset open_bop_dataset(const fs::path& root, std::string_view split, const BopOpenOptions& options) {
+namespace {
+
+bool has_scene_folder(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& scene : fs::directory_iterator(dir, ec)) {
+    if (scene.is_directory() && all_digits(scene.path().filename().string()) && fs::exists(scene.path() / "scene_camera.json", ec)) {
+      return true;
+    }
+  }
+  return false;
+}
+
+bool has_meshes(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string stem = entry.path().stem().string();
+    if (entry.path().extension() == ".ply" && stem.starts_with("obj_") && all_digits(stem.substr(4))) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+BopLayout scan_bop_layout(const fs::path& root) {
   std::error_code ec;
   if (!fs::is_directory(root, ec)) throw Error(fmt::format("{}: not a directory", root.string()));
-  const fs::path split_dir = root / split;
-  if (!fs::is_directory(split_dir, ec)) {
-    throw Error(fmt::format("{}: no split '{}' in the dataset (no such folder)", split_dir.string(), split));
+  BopLayout layout;
+  layout.root = root;
+  for (const auto& entry : fs::directory_iterator(root, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_directory()) {
+      if (name.starts_with("models") && has_meshes(entry.path())) {
+        layout.model_folders.push_back(name);
+      } else if (has_scene_folder(entry.path())) {
+        const std::size_t cut = name.find('_');
+        layout.splits.push_back({name, name.substr(0, cut), cut == std::string::npos ? "" : name.substr(cut + 1)});
+      }
+    } else if (entry.path().extension() == ".json") {
+      if (name == "camera.json" || name.starts_with("camera_")) layout.camera_files.push_back(name);
+      if (name.starts_with("test_targets") || name.starts_with("val_targets")) layout.target_files.push_back(name);
+    }
   }
+  std::sort(layout.splits.begin(), layout.splits.end(), [](const auto& a, const auto& b) { return a.folder < b.folder; });
+  std::sort(layout.model_folders.begin(), layout.model_folders.end());
+  std::sort(layout.camera_files.begin(), layout.camera_files.end());
+  std::sort(layout.target_files.begin(), layout.target_files.end());
+  return layout;
+}
+
+BopSplitFolder resolve_bop_split(const BopLayout& layout, std::string_view name) {
+  std::vector<std::string> all;
+  for (const BopSplitFolder& s : layout.splits) {
+    if (s.folder == name) return s;
+    all.push_back(s.folder);
+  }
+  std::vector<const BopSplitFolder*> typed;
+  for (const BopSplitFolder& s : layout.splits) {
+    if (s.split == name) typed.push_back(&s);
+  }
+  if (typed.size() == 1) return *typed.front();
+  const fs::path wanted = layout.root / std::string(name);
+  if (typed.size() > 1) {
+    std::vector<std::string> names;
+    for (const auto* s : typed) names.push_back(s->folder);
+    throw Error(fmt::format("{}: the dataset has {} '{}' splits ({}): name one with --split", wanted.string(), typed.size(),
+                            name, fmt::join(names, ", ")));
+  }
+  throw Error(fmt::format("{}: no split '{}' in the dataset ({})", wanted.string(), name,
+                          all.empty() ? std::string("it has no split folder with scenes in it")
+                                      : fmt::format("its splits: {}", fmt::join(all, ", "))));
+}
+
+std::string resolve_models_folder(const BopLayout& layout, std::string_view name) {
+  const auto has = [&](std::string_view folder) {
+    return std::find(layout.model_folders.begin(), layout.model_folders.end(), folder) != layout.model_folders.end();
+  };
+  if (name != "models" || has(name)) return std::string(name);  // asked for by name: reading it says what is missing
+  for (const char* preferred : {"models_cad", "models_eval"}) {
+    if (has(preferred)) return preferred;
+  }
+  if (!layout.model_folders.empty()) return layout.model_folders.front();
+  std::error_code ec;
+  return fs::is_directory(layout.root / "models", ec) ? std::string("models") : std::string();  // models_info.json alone
+}
+
+BopDataset open_bop_dataset(const fs::path& root, std::string_view split_name, const BopOpenOptions& options) {
+  std::error_code ec;
+  const BopLayout layout = scan_bop_layout(root);
+  const BopSplitFolder split = resolve_bop_split(layout, split_name);
+  const fs::path split_dir = root / split.folder;
   BopDataset ds;
   ds.root = root;
-  ds.split = std::string(split);
-  if (const fs::path p = root / "camera.json"; fs::exists(p, ec)) ds.camera = parse_bop_camera(read_text(p), p.string());
-  const fs::path models_dir = root / options.models_dir;
-  if (const fs::path p = models_dir / "models_info.json"; fs::exists(p, ec)) {
+  ds.split = split.folder;
+  // The image size: camera.json, else the camera file of the split's sensor (T-LESS, HB), else the
+  // dataset's only camera file; without one it is taken from each depth image.
+  std::optional<std::string> camera_file;
+  for (const std::string& candidate : {std::string("camera.json"), fmt::format("camera_{}.json", split.type)}) {
+    if (!camera_file && std::find(layout.camera_files.begin(), layout.camera_files.end(), candidate) != layout.camera_files.end()) {
+      camera_file = candidate;
+    }
+  }
+  if (!camera_file && layout.camera_files.size() == 1) camera_file = layout.camera_files.front();
+  if (camera_file) ds.camera = parse_bop_camera(read_text(root / *camera_file), (root / *camera_file).string());
+  ds.models_dir = resolve_models_folder(layout, options.models_dir);
+  const bool has_eval_models =
+      std::find(layout.model_folders.begin(), layout.model_folders.end(), "models_eval") != layout.model_folders.end();
+  ds.eval_models_dir = has_eval_models ? "models_eval" : ds.models_dir;
+  const fs::path models_dir = root / ds.models_dir;
+  if (const fs::path p = models_dir / "models_info.json"; !ds.models_dir.empty() && fs::exists(p, ec)) {
     ds.models = parse_models_info(read_text(p), p.string(), &ds.notes);
   }
-  if (fs::is_directory(models_dir, ec)) {
+  if (!ds.models_dir.empty() && fs::is_directory(models_dir, ec)) {
     for (const auto& entry : fs::directory_iterator(models_dir)) {
       const std::string stem = entry.path().stem().string();
       if (entry.path().extension() == ".ply" && stem.starts_with("obj_") && all_digits(stem.substr(4))) {
@@ -423,7 +520,10 @@ BopDataset open_bop_dataset(const fs::path& root, std::string_view split, const 
       const fs::path ycb_name = dir / fmt::format("{:06d}-depth.png", im_id);
       if (fs::exists(bop_name, ec)) image.depth_path = bop_name;
       else if (fs::exists(ycb_name, ec)) image.depth_path = ycb_name;
-      else {
+      else if (fs::exists(dir / "depth" / fmt::format("{:06d}.tif", im_id), ec)) {
+        throw Error(fmt::format("{}: image {}'s depth is a TIFF (depth/{:06d}.tif, as ITODD's); viewpose reads 16-bit PNG "
+                                "depth", dir.string(), im_id, im_id));
+      } else {
         throw Error(fmt::format("{}: no depth image for image {} (looked for depth/{:06d}.png and {:06d}-depth.png)",
                                 dir.string(), im_id, im_id, im_id));
       }

@@ -6,6 +6,7 @@
 #include <set>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "viewpose/core/error.hpp"
@@ -146,33 +147,74 @@ FileInfo inspect_json(const fs::path& path) {
 FileInfo inspect_dataset(const fs::path& dir) {
   FileInfo info;
   info.kind = "BOP dataset folder";
-  std::vector<std::string> splits;
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    if (!entry.is_directory()) continue;
-    for (const auto& scene : fs::directory_iterator(entry.path())) {
-      if (scene.is_directory() && fs::exists(scene.path() / "scene_camera.json")) {
-        splits.push_back(entry.path().filename().string());
-        break;
-      }
-    }
+  const BopLayout layout = scan_bop_layout(dir);
+  if (layout.splits.empty()) {
+    throw Error(fmt::format("{}: a folder with no BOP split in it (no SPLIT/SCENE/scene_camera.json)", dir.string()));
   }
-  std::sort(splits.begin(), splits.end());
-  if (splits.empty()) throw Error(fmt::format("{}: a folder with no BOP split in it (no */*/scene_camera.json)", dir.string()));
-  for (const std::string& split : splits) {
-    const BopDataset ds = open_bop_dataset(dir, split);
-    std::set<int> scenes;
-    std::size_t poses = 0;
+  std::vector<std::string> notes;
+  for (const BopSplitFolder& split : layout.splits) {
+    const BopDataset ds = open_bop_dataset(dir, split.folder);
+    std::set<int> scenes, objects;
+    std::set<double> depth_scales;
+    std::size_t poses = 0, ycb_named = 0;
     for (const auto& im : ds.images) {
       scenes.insert(im.scene_id);
       poses += im.gt.size();
+      for (const auto& g : im.gt) objects.insert(g.obj_id);
+      depth_scales.insert(im.camera.depth_scale_mm);
+      ycb_named += im.depth_path.parent_path().filename() != "depth";
     }
-    info.notes.push_back(fmt::format("split '{}': {} scenes, {} images, {} ground-truth poses", split, scenes.size(),
-                                     ds.images.size(), poses));
-    if (split == splits.front()) {
-      info.notes.push_back(fmt::format("models: {} in models_info.json, {} mesh files", ds.models.size(), ds.model_files.size()));
-      if (ds.camera) info.notes.push_back(fmt::format("camera: {}x{}", ds.camera->K.width, ds.camera->K.height));
+    const std::string what = split.type.empty() ? fmt::format("split '{}'", split.folder)
+                                                : fmt::format("split '{}' ({}, {})", split.folder, split.split, split.type);
+    std::vector<std::string> scales;
+    for (double s : depth_scales) scales.push_back(fmt::format("{:g}", s));
+    info.notes.push_back(fmt::format("{}: {} scenes, {} images, {} ground-truth poses of {} objects; depth {} ({} mm per "
+                                     "unit){}", what, scenes.size(), ds.images.size(), poses, objects.size(),
+                                     ycb_named == ds.images.size() ? "SCENE/NNNNNN-depth.png (YCB-Video's naming)"
+                                                                   : "SCENE/depth/NNNNNN.png",
+                                     fmt::join(scales, ", "), ds.camera ? fmt::format(", {} x {}", ds.camera->K.width, ds.camera->K.height) : ""));
+    for (const auto& note : ds.notes) {
+      if (std::find(notes.begin(), notes.end(), note) == notes.end()) notes.push_back(note);
     }
   }
+  const std::string models = resolve_models_folder(layout);
+  for (const std::string& folder : layout.model_folders) {
+    std::size_t meshes = 0;
+    for (const auto& entry : fs::directory_iterator(dir / folder)) meshes += entry.path().extension() == ".ply";
+    std::string with_info = "no models_info.json";
+    if (fs::exists(dir / folder / "models_info.json")) {
+      const auto bytes = read_file_bytes(dir / folder / "models_info.json");
+      const ModelsInfo mi = parse_models_info(std::string(bytes.begin(), bytes.end()), (dir / folder / "models_info.json").string());
+      const auto symmetric = std::count_if(mi.begin(), mi.end(), [](const auto& kv) {
+        return !kv.second.symmetries_discrete.empty() || !kv.second.symmetries_continuous.empty();
+      });
+      with_info = fmt::format("models_info.json with {} objects, {} of them symmetric", mi.size(), symmetric);
+    }
+    std::vector<std::string> uses;
+    if (folder == models) uses.push_back("recognition's default");
+    if (folder == "models_eval" || (folder == models && std::find(layout.model_folders.begin(), layout.model_folders.end(),
+                                                                  "models_eval") == layout.model_folders.end())) {
+      uses.push_back("scoring");
+    }
+    info.notes.push_back(fmt::format("{}/: {} meshes, {}{}", folder, meshes, with_info,
+                                     uses.empty() ? "" : fmt::format(" (used for {})", fmt::join(uses, " and "))));
+  }
+  if (layout.model_folders.empty()) info.problems.push_back("no models folder (models/ with obj_NNNNNN.ply): nothing to recognize or score");
+  if (!layout.camera_files.empty()) info.notes.push_back(fmt::format("cameras: {}", fmt::join(layout.camera_files, ", ")));
+  for (const std::string& file : layout.target_files) {
+    const std::vector<BopTarget> targets = read_bop_targets(dir / file);
+    std::set<std::pair<int, int>> images;
+    std::set<int> objects;
+    int instances = 0;
+    for (const BopTarget& t : targets) {
+      images.insert({t.scene_id, t.im_id});
+      objects.insert(t.obj_id);
+      instances += t.inst_count;
+    }
+    info.notes.push_back(fmt::format("targets: {}: {} instances of {} objects to find in {} images (viewpose bop --targets)",
+                                     file, instances, objects.size(), images.size()));
+  }
+  for (const auto& note : notes) info.notes.push_back("note: " + note);
   return info;
 }
 

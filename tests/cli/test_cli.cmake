@@ -91,6 +91,23 @@ run(TRUE bop --db "${WORK}/jug.vpdb" --dataset "${WORK}/sim" -o "${WORK}/results
 expect_in("${OUT}" "in 4 images")
 run(TRUE info "${WORK}/results.csv")
 expect_in("${OUT}" "BOP19 results CSV")
+# The BOP19 task: only the images the targets list, only their objects (the jug, 1; a can, 2, is not
+# in these frames, so nothing of it may come back), at most the instances listed.
+file(WRITE "${WORK}/sim/test_targets_bop19.json"
+     "[{\"scene_id\": 1, \"im_id\": 1, \"obj_id\": 1, \"inst_count\": 1}, {\"scene_id\": 2, \"im_id\": 0, \"obj_id\": 2, \"inst_count\": 1}]")
+run(TRUE info "${WORK}/sim")
+expect_in("${OUT}" "targets: test_targets_bop19.json: 2 instances of 2 objects to find in 2 images")
+run(TRUE bop --db "${WORK}/jug.vpdb" --dataset "${WORK}/sim" --targets "${WORK}/sim/test_targets_bop19.json" -o "${WORK}/task.csv")
+expect_in("${OUT}" "1 detections in 2 images")
+file(STRINGS "${WORK}/task.csv" task_rows)
+list(GET task_rows 1 task_row)
+string(FIND "${task_row}" "1,1,1," at)
+if(NOT at EQUAL 0)
+  message(FATAL_ERROR "bop --targets wrote '${task_row}', expected scene 1 image 1's jug")
+endif()
+file(WRITE "${WORK}/bad_targets.json" "[{\"scene_id\": 7, \"im_id\": 0, \"obj_id\": 1, \"inst_count\": 1}]")
+run(FALSE bop --db "${WORK}/jug.vpdb" --dataset "${WORK}/sim" --targets "${WORK}/bad_targets.json" -o "${WORK}/bad.csv")
+expect_in("${ERR}" "lists scene 7 image 0, which split 'test' does not have")
 # An interrupted bop run resumes without losing or doubling rows: one image, then (after a row of
 # an image not yet vouched for was left behind, as an interruption between the two writes leaves
 # it) two more, then the rest; the same rows as the run in one go, times aside.

@@ -9,6 +9,7 @@
 #include "viewpose/io/bop_results.hpp"
 #include "viewpose/io/depth_png.hpp"
 #include "viewpose/io/file.hpp"
+#include "viewpose/io/inspect.hpp"
 
 namespace viewpose {
 namespace {
@@ -89,8 +90,8 @@ TEST(BopJson, MalformedFilesAreNamedWithTheEntry) {
 }
 
 // A scene_gt.json entry with the rotation's nine numbers as given.
-std::string gt_entry(const Eigen::Matrix3d& R) {
-  return fmt::format("{{\"0\": [{{\"cam_R_m2c\": [{}], \"cam_t_m2c\": [0, 0, 800], \"obj_id\": 8}}]}}",
+std::string gt_entry(const Eigen::Matrix3d& R, int image = 0) {
+  return fmt::format("{{\"{}\": [{{\"cam_R_m2c\": [{}], \"cam_t_m2c\": [0, 0, 800], \"obj_id\": 8}}]}}", image,
                      fmt::join(std::vector<double>{R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1),
                                                    R(2, 2)}, ", "));
 }
@@ -215,6 +216,99 @@ TEST(BopDatasetTest, MissingOrInconsistentPiecesAreNamed) {
   write_file_atomic(u.dir.path() / "camera.json", format_bop_camera({{600, 600, 31.5, 23.5, 640, 480}, 0.1}));
   const BopDataset ds = open_bop_dataset(u.dir.path(), "test");
   expect_error([&] { load_bop_frame(ds.images[0]); }, "image is 64x48 but camera.json says 640x480");
+}
+
+// T-LESS / HB / LM-O as published: typed split folders (test_primesense, train_pbr), no models/ but
+// models_cad/ and models_eval/, the sensor's camera file, the BOP19 targets, a rotation off
+// orthonormal by LM-O's 2e-3.
+struct PublishedLayout {
+  test::TempDir dir;
+  PublishedLayout() {
+    const auto root = dir.path();
+    for (const char* split : {"test_primesense", "train_pbr"}) {
+      const auto scene = root / split / "000002";
+      std::filesystem::create_directories(scene / "depth");
+      SceneCameras cams;
+      cams[3] = {{1075.65, 1073.90, 31.5, 23.5, 0, 0}, 0.1};
+      write_file_atomic(scene / "scene_camera.json", format_scene_camera(cams));
+      DepthImage d(64, 48);
+      for (float& z : d.depth_m) z = 0.9f;
+      write_depth_png(scene / "depth" / "000003.png", d, 0.0001);
+    }
+    Eigen::Matrix3d off = some_pose(0.8, 1.0).linear();
+    off(1, 2) += 2e-3;
+    write_file_atomic(root / "test_primesense" / "000002" / "scene_gt.json", gt_entry(off, 3));
+    write_file_atomic(root / "camera_primesense.json", format_bop_camera({{1075.65, 1073.90, 31.5, 23.5, 64, 48}, 0.1}));
+    write_file_atomic(root / "camera_kinect.json", format_bop_camera({{1076, 1074, 31.5, 23.5, 720, 540}, 0.1}));
+    ModelsInfo models;
+    models[8].diameter_m = 0.26;
+    for (const char* folder : {"models_cad", "models_eval"}) {
+      std::filesystem::create_directories(root / folder);
+      write_file_atomic(root / folder / "models_info.json", format_models_info(models));
+      write_file_atomic(root / folder / "obj_000008.ply", "ply");
+    }
+    write_file_atomic(root / "test_targets_bop19.json", R"([{"im_id": 3, "inst_count": 1, "obj_id": 8, "scene_id": 2}])");
+  }
+};
+
+TEST(BopDatasetTest, PublishedLayoutsAreFoundByName) {
+  PublishedLayout p;
+  const BopLayout layout = scan_bop_layout(p.dir.path());
+  ASSERT_EQ(layout.splits.size(), 2u);
+  EXPECT_EQ(layout.splits[0].folder, "test_primesense");
+  EXPECT_EQ(layout.splits[0].split, "test");
+  EXPECT_EQ(layout.splits[0].type, "primesense");
+  EXPECT_EQ(layout.splits[1].type, "pbr");
+  EXPECT_EQ(layout.model_folders, (std::vector<std::string>{"models_cad", "models_eval"}));
+  EXPECT_EQ(layout.camera_files, (std::vector<std::string>{"camera_kinect.json", "camera_primesense.json"}));
+  EXPECT_EQ(layout.target_files, (std::vector<std::string>{"test_targets_bop19.json"}));
+  EXPECT_EQ(resolve_models_folder(layout), "models_cad");
+  EXPECT_EQ(resolve_models_folder(layout, "models_eval"), "models_eval");
+
+  // "test" means the one test folder; its sensor's camera gives the image size.
+  const BopDataset ds = open_bop_dataset(p.dir.path(), "test");
+  EXPECT_EQ(ds.split, "test_primesense");
+  EXPECT_EQ(ds.models_dir, "models_cad");
+  EXPECT_EQ(ds.eval_models_dir, "models_eval");
+  ASSERT_TRUE(ds.camera.has_value());
+  EXPECT_EQ(ds.camera->K.width, 64);
+  EXPECT_EQ(ds.models.count(8), 1u);
+  ASSERT_EQ(ds.images.size(), 1u);
+  ASSERT_EQ(ds.images[0].gt.size(), 1u);
+  EXPECT_TRUE(is_rotation(ds.images[0].gt[0].T_camera_object.linear(), 1e-12));
+  ASSERT_EQ(ds.notes.size(), 1u);
+  EXPECT_NE(ds.notes[0].find("scene_gt.json: 1 rotation is off orthonormal"), std::string::npos) << ds.notes[0];
+  EXPECT_NEAR(load_bop_frame(ds.images[0]).depth.at(5, 5), 0.9f, 1e-6);
+  EXPECT_EQ(open_bop_dataset(p.dir.path(), "train_pbr").images.size(), 1u);
+
+  // A second test folder: "test" is ambiguous, and the message lists both.
+  std::filesystem::create_directories(p.dir.path() / "test_kinect");
+  std::filesystem::copy(p.dir.path() / "test_primesense" / "000002", p.dir.path() / "test_kinect" / "000002",
+                        std::filesystem::copy_options::recursive);
+  expect_error([&] { open_bop_dataset(p.dir.path(), "test"); }, "2 'test' splits (test_kinect, test_primesense)");
+  expect_error([&] { open_bop_dataset(p.dir.path(), "val"); }, "no split 'val' in the dataset (its splits: test_kinect");
+  // ITODD keeps its depth as TIFF: said, not "missing".
+  const auto scene = p.dir.path() / "train_pbr" / "000002" / "depth";
+  std::filesystem::rename(scene / "000003.png", scene / "000003.tif");
+  expect_error([&] { open_bop_dataset(p.dir.path(), "train_pbr"); }, "depth is a TIFF");
+}
+
+TEST(BopDatasetTest, InfoSaysWhatAPublishedLayoutHolds) {
+  PublishedLayout p;
+  const FileInfo info = inspect_file(p.dir.path());
+  EXPECT_EQ(info.kind, "BOP dataset folder");
+  std::string all;
+  for (const auto& n : info.notes) all += n + "\n";
+  for (const char* expected : {"split 'test_primesense' (test, primesense): 1 scenes, 1 images, 1 ground-truth poses of 1 objects",
+                               "split 'train_pbr' (train, pbr)", "64 x 48",
+                               "models_cad/: 1 meshes, models_info.json with 1 objects, 0 of them symmetric (used for recognition's default)",
+                               "models_eval/: 1 meshes, models_info.json with 1 objects, 0 of them symmetric (used for scoring)",
+                               "cameras: camera_kinect.json, camera_primesense.json",
+                               "targets: test_targets_bop19.json: 1 instances of 1 objects to find in 1 images",
+                               "note: ", "rotation is off orthonormal"}) {
+    EXPECT_NE(all.find(expected), std::string::npos) << expected << " not in:\n" << all;
+  }
+  EXPECT_TRUE(info.problems.empty());
 }
 
 TEST(BopResults, CsvRoundTripIsExact) {

@@ -103,10 +103,46 @@ struct BopImage {
   std::vector<GroundTruthInfo> gt_info;  ///< empty, or one per gt entry
 };
 
+/// A split folder as BOP names them: `test`, `val`, or SPLIT_TYPE (`test_primesense`, `train_pbr`,
+/// T-LESS's `train_render_reconst`): the split is the name before the first underscore.
+struct BopSplitFolder {
+  std::string folder;  ///< as on disk: "test_primesense"
+  std::string split;   ///< "test"
+  std::string type;    ///< "primesense"; empty when the folder has none
+};
+
+/// What a dataset folder holds, found from its names alone (no image is read): the split folders
+/// (those with scene folders holding scene_camera.json), the model folders (with obj_NNNNNN.ply:
+/// models, models_eval, T-LESS's models_cad and models_reconst, YCB-V's models_fine), the camera
+/// files (camera.json, or per sensor: camera_primesense.json, YCB-V's camera_uw.json) and the
+/// target lists (test_targets_bop19.json, ...). Each list sorted by name.
+struct BopLayout {
+  std::filesystem::path root;
+  std::vector<BopSplitFolder> splits;
+  std::vector<std::string> model_folders;
+  std::vector<std::string> camera_files;
+  std::vector<std::string> target_files;
+};
+BopLayout scan_bop_layout(const std::filesystem::path& root);
+
+/// The split folder a name means: the folder of that name (`test_primesense`), or, for a bare split
+/// (`test`) with no folder of its own, its one typed folder. Throws viewpose::Error listing the
+/// choices when there is none or several.
+BopSplitFolder resolve_bop_split(const BopLayout& layout, std::string_view name);
+
+/// The models folder to read: `name` when it exists; for the default "models" when it does not,
+/// the first of models_cad (T-LESS), models_eval and any other models_* folder with meshes.
+/// Empty when the dataset has none.
+std::string resolve_models_folder(const BopLayout& layout, std::string_view name = "models");
+
 struct BopDataset {
   std::filesystem::path root;
-  std::string split;
-  std::optional<BopCamera> camera;  ///< camera.json, when the dataset has one
+  std::string split;                ///< the split folder read ("test", "test_primesense", ...)
+  std::string models_dir;           ///< the models folder read, under root (empty: none)
+  /// The models folder scoring should use: models_eval when the dataset has it (the BOP toolkit's
+  /// choice: meshes resampled evenly for the errors), else models_dir.
+  std::string eval_models_dir;
+  std::optional<BopCamera> camera;  ///< camera.json (or the split type's camera_TYPE.json), when there is one
   ModelsInfo models;                ///< models_info.json, when the dataset has one
   std::map<int, std::filesystem::path> model_files;  ///< obj_id -> obj_NNNNNN.ply
   std::vector<BopImage> images;     ///< sorted by scene, then image
@@ -116,11 +152,14 @@ struct BopDataset {
 };
 
 struct BopOpenOptions {
-  std::string models_dir = "models";  ///< folder under the root with models_info.json and meshes
+  /// Folder under the root with models_info.json and meshes (resolve_models_folder: the default
+  /// finds T-LESS's models_cad when there is no models/).
+  std::string models_dir = "models";
 };
 
-/// Reads a split's json files and checks that every image's depth file exists. Throws
-/// viewpose::Error naming the first missing or malformed file.
+/// Reads a split's json files and checks that every image's depth file exists. `split` is a split
+/// folder or a bare split name (resolve_bop_split). Throws viewpose::Error naming the first missing
+/// or malformed file.
 BopDataset open_bop_dataset(const std::filesystem::path& root, std::string_view split,
                             const BopOpenOptions& options = {});
 
