@@ -40,6 +40,12 @@ NearRotation nearest_rotation(const Eigen::Matrix3d& M) {
     out.kind = NearRotation::Kind::Reflection;
   } else if (out.deviation > kMaxRotationRounding) {
     out.kind = NearRotation::Kind::NotRigid;
+  } else if (out.deviation <= 1e-12) {
+    // Orthonormal to double precision: taken exactly as given, so that rotations read back from
+    // files we wrote at full precision stay bit for bit what they were (bop --resume rewrites the
+    // rows it read; the correction would move their last digits).
+    out.R = M;
+    out.kind = NearRotation::Kind::Rotation;
   } else {
     const Eigen::Matrix3d& V = eig.eigenvectors();
     out.R = M * V * sigma.cwiseInverse().asDiagonal() * V.transpose();
