@@ -56,8 +56,7 @@ double depth_to_distance(double z, int u, int v, const CameraIntrinsics& K) {
   return z * std::sqrt(x * x + y * y + 1.0);
 }
 
-DistanceWindow render_distance(const TriangleMesh& mesh, const Transform& T_camera_object, const CameraIntrinsics& K,
-                               int closed_winding) {
+DistanceWindow projected_window(const TriangleMesh& mesh, const Transform& T_camera_object, const CameraIntrinsics& K) {
   // Only the window the model's bounding box projects to can hold it (the box's projection holds
   // the model's whenever the whole box is in front of the camera); drawing just that is what keeps
   // VSD fast, as most objects cover a small part of the image.
@@ -92,6 +91,19 @@ DistanceWindow render_distance(const TriangleMesh& mesh, const Transform& T_came
   w.v0 = v0;
   w.width = u1 - u0 + 1;
   w.height = v1 - v0 + 1;
+  return w;
+}
+
+bool DistanceWindow::overlaps(const DistanceWindow& o) const {
+  return width > 0 && height > 0 && o.width > 0 && o.height > 0 && u0 < o.u0 + o.width && o.u0 < u0 + width &&
+         v0 < o.v0 + o.height && o.v0 < v0 + height;
+}
+
+DistanceWindow render_distance(const TriangleMesh& mesh, const Transform& T_camera_object, const CameraIntrinsics& K,
+                               int closed_winding) {
+  DistanceWindow w = projected_window(mesh, T_camera_object, K);
+  if (w.width == 0 || w.height == 0) return w;
+  const int u0 = w.u0, v0 = w.v0;
   // Window pixel (x, y) is image pixel (u0 + x, v0 + y): the same principal point, moved.
   CameraIntrinsics Kw = K;
   Kw.cx = K.cx - u0;
@@ -243,12 +255,19 @@ ImageCounts score_image(const BopImage& im, std::span<const BopResult> results, 
         gt_drawn[g] = render_distance(*object.mesh, im.gt[g].T_camera_object, frame.K, object.closed_winding);
     for (EstimateErrors& e : list) {
       const Transform& T = results[e.result].T_camera_object;
-      const DistanceWindow drawn = render_distance(*object.mesh, T, frame.K, object.closed_winding);
+      // An estimate whose window meets no truth's shares no pixel with any: e = 1 against each
+      // (the toolkit's shortcut too), and it need not be drawn. Far-off false positives are common.
+      const DistanceWindow window = projected_window(*object.mesh, T, frame.K);
+      bool meets = false;
+      for (const auto& [g, drawn_gt] : gt_drawn) meets = meets || (im.gt[g].obj_id == id && window.overlaps(drawn_gt));
+      const DistanceWindow drawn = meets ? render_distance(*object.mesh, T, frame.K, object.closed_winding) : window;
       for (std::size_t g = 0; g < im.gt.size(); ++g) {
         if (im.gt[g].obj_id != id) continue;
         const Transform& truth = im.gt[g].T_camera_object;
         e.gts.push_back(g);
-        e.vsd.push_back(vsd_errors(frame.depth, frame.K, drawn, gt_drawn.at(g), o.vsd_delta_m, o.vsd_taus, object.diameter_m));
+        e.vsd.push_back(drawn.overlaps(gt_drawn.at(g))
+                            ? vsd_errors(frame.depth, frame.K, drawn, gt_drawn.at(g), o.vsd_delta_m, o.vsd_taus, object.diameter_m)
+                            : std::vector<double>(o.vsd_taus.size(), 1.0));
         e.mssd_m.push_back(mssd_error(T, truth, object.mesh->vertices, object.symmetries));
         e.mspd_px.push_back(mspd_error(T, truth, object.mesh->vertices, object.symmetries, frame.K));
       }

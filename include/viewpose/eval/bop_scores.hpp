@@ -95,7 +95,11 @@ struct DistanceWindow {
   std::vector<float> distance_m;              ///< width * height, row-major
   /// The distance at image pixel (u, v); NaN outside the window.
   float at(int u, int v) const;
+  /// Whether the two windows share a pixel.
+  bool overlaps(const DistanceWindow& other) const;
 };
+/// The window alone (distance_m left empty): where render_distance would draw.
+DistanceWindow projected_window(const TriangleMesh& mesh, const Transform& T_camera_object, const CameraIntrinsics& K);
 DistanceWindow render_distance(const TriangleMesh& mesh, const Transform& T_camera_object, const CameraIntrinsics& K,
                                int closed_winding = 0);
 
