@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
+#include "viewpose/eval/bop_scores.hpp"
 #include "viewpose/eval/metrics.hpp"
 
 namespace viewpose {
@@ -102,16 +103,34 @@ EvalReport evaluate(const BopDataset& ds, const std::map<int, std::vector<Eigen:
   std::set<int> ids;
   for (const BopImage& im : ds.images)
     for (const GroundTruthPose& g : im.gt) ids.insert(g.obj_id);
-  std::map<std::pair<int, int>, std::vector<const BopResult*>> by_image;
-  for (const BopResult& r : results) by_image[{r.scene_id, r.im_id}].push_back(&r);
-
   EvalReport report;
   report.estimates.resize(results.size());
+  const std::vector<bool> part = results_taking_part(results, o.targets);
   std::set<std::pair<int, int>> known_images;
   for (const BopImage& im : ds.images) known_images.insert({im.scene_id, im.im_id});
-  for (const BopResult& r : results) {
-    if (known_images.count({r.scene_id, r.im_id})) ids.insert(r.obj_id);
+  std::map<std::pair<int, int>, std::vector<const BopResult*>> by_image;
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const BopResult& r = results[i];
+    const bool known = known_images.count({r.scene_id, r.im_id}) > 0;
+    report.estimates[i].taking_part = part[i];
+    if (known && !part[i]) {
+      report.estimates[i].in_split = true;
+      ++report.beyond_targets;
+      continue;
+    }
+    by_image[{r.scene_id, r.im_id}].push_back(&r);
+    if (known) ids.insert(r.obj_id);
   }
+  // With targets, the objects each image's targets name; the others' ground truths are no targets.
+  std::map<std::pair<int, int>, std::set<int>> listed;
+  if (o.targets)
+    for (const BopTarget& t : *o.targets) listed[{t.scene_id, t.im_id}].insert(t.obj_id);
+  const auto is_target = [&](const BopImage& im, std::size_t g) {
+    if (im.gt_info.size() == im.gt.size() && im.gt_info[g].visib_fract < o.min_visib_fract) return false;
+    if (!o.targets) return true;
+    const auto l = listed.find({im.scene_id, im.im_id});
+    return l != listed.end() && l->second.count(im.gt[g].obj_id) > 0;
+  };
 
   std::map<int, ObjectData> objects;
   for (int id : ids) {
@@ -159,13 +178,14 @@ EvalReport evaluate(const BopDataset& ds, const std::map<int, std::vector<Eigen:
           best_add_s = add_s;
         }
       }
-      const bool target = best && (im.gt_info.size() != im.gt.size() || im.gt_info[*best].visib_fract >= o.min_visib_fract);
+      const bool target = best && is_target(im, *best);
       const bool correct = best && best_add_s < o.correct_fraction * object.diameter_m;
       EstimateOutcome& outcome = report.estimates[static_cast<std::size_t>(e - results.data())];
       outcome.in_split = true;
       outcome.paired = best.has_value();
       outcome.target = target;
       if (target || !correct) {
+        outcome.counted = true;
         for (Tally* t : {&total, &per_object[e->obj_id], &per_scene[im.scene_id]}) {
           ++t->score.estimates;
           t->score.false_positives += correct ? 0 : 1;
@@ -187,16 +207,34 @@ EvalReport evaluate(const BopDataset& ds, const std::map<int, std::vector<Eigen:
       outcome.correct_add = err.add < o.correct_fraction * object.diameter_m;
     }
     for (std::size_t g = 0; g < im.gt.size(); ++g) {
-      if (im.gt_info.size() == im.gt.size() && im.gt_info[g].visib_fract < o.min_visib_fract) continue;
+      if (!is_target(im, g)) continue;
       const int id = im.gt[g].obj_id;
       const Errors* e = errors_of_gt[g] ? &*errors_of_gt[g] : nullptr;
       const ObjectData& object = objects.at(id);
       for (Tally* t : {&total, &per_object[id], &per_scene[im.scene_id]}) t->add_target(e, object.diameter_m, object.symmetries.size() > 1, o);
     }
   }
-  report.ignored_estimates = static_cast<int>(results.size() - matched_results);
-  report.mean_time_s = report.images_timed ? time_sum / report.images_timed : 0.0;
+  report.ignored_estimates = static_cast<int>(results.size() - matched_results) - report.beyond_targets;
   report.total = total.finish(o);
+
+  // The precision-recall curve: counted estimates by decreasing score, a point where the score
+  // changes (and at the last), so that equal scores enter together.
+  std::vector<std::pair<double, bool>> scored;  // score, correct
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const EstimateOutcome& e = report.estimates[i];
+    if (e.counted) scored.emplace_back(results[i].score, e.correct_add_s && e.target);
+  }
+  std::stable_sort(scored.begin(), scored.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  int correct = 0;
+  for (std::size_t k = 0; k < scored.size(); ++k) {
+    correct += scored[k].second;
+    if (k + 1 < scored.size() && scored[k + 1].first == scored[k].first) continue;
+    const int n = static_cast<int>(k + 1);
+    report.pr_curve.push_back({scored[k].first, n, correct,
+                               report.total.targets ? static_cast<double>(correct) / report.total.targets : 0.0,
+                               static_cast<double>(correct) / n});
+  }
+  report.mean_time_s = report.images_timed ? time_sum / report.images_timed : 0.0;
   for (const auto& [id, t] : per_object) report.per_object[id] = t.finish(o);
   for (const auto& [id, t] : per_scene) report.per_scene[id] = t.finish(o);
   return report;

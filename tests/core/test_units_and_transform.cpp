@@ -66,6 +66,7 @@ TEST(Transform, NearRotationsAreTakenAndOthersRefused) {
   EXPECT_EQ(exact.kind, NearRotation::Kind::Rotation);
   EXPECT_LT(exact.deviation, 1e-12);
   EXPECT_TRUE(exact.R.isApprox(R, 1e-12));
+  EXPECT_TRUE(exact.R == R);  // bit for bit: results read back and written again do not change
 
   // Rounded to three decimals, as an annotation tool might: a rotation with rounding in it.
   const Eigen::Matrix3d rounded = (R * 1000.0).array().round() / 1000.0;

@@ -115,6 +115,36 @@ TEST(Evaluate, RecallFalsePositivesAndErrorsOnKnownEstimates) {
 
   EXPECT_EQ(s.found_add_or_s, 2);  // no symmetries declared: ADD
 
+  // Precision over the score: 0.9 (two, both right), 0.8 (right), 0.5 (the false positive).
+  ASSERT_EQ(r.pr_curve.size(), 3u);
+  EXPECT_EQ(r.pr_curve[0].score, 0.9);
+  EXPECT_EQ(r.pr_curve[0].estimates, 2);
+  EXPECT_EQ(r.pr_curve[0].correct, 2);
+  EXPECT_DOUBLE_EQ(r.pr_curve[0].recall, 0.5);
+  EXPECT_DOUBLE_EQ(r.pr_curve[0].precision, 1.0);
+  EXPECT_DOUBLE_EQ(r.pr_curve[1].recall, 0.75);
+  EXPECT_DOUBLE_EQ(r.pr_curve[1].precision, 1.0);
+  EXPECT_EQ(r.pr_curve[2].score, 0.5);
+  EXPECT_DOUBLE_EQ(r.pr_curve[2].recall, 0.75);  // the whole report's
+  EXPECT_DOUBLE_EQ(r.pr_curve[2].precision, 0.75);
+  EXPECT_DOUBLE_EQ(r.false_positives_per_image(), 1.0 / 3.0);
+  EXPECT_TRUE(r.estimates[3].counted);
+  EXPECT_FALSE(r.estimates[4].counted);
+
+  // BOP19 targets: image 1 asks for one instance (its best estimate only), image 2 for none.
+  EvalOptions with_targets;
+  with_targets.targets = std::vector<BopTarget>{{1, 0, 7, 2}, {1, 1, 7, 1}};
+  const EvalReport t = evaluate(ds, models, results, with_targets);
+  EXPECT_EQ(t.total.targets, 3);  // image 2's is not listed
+  EXPECT_EQ(t.total.found_add_s, 3);
+  EXPECT_EQ(t.total.estimates, 3);
+  EXPECT_EQ(t.total.false_positives, 0);  // the second estimate of image 1 takes no part
+  EXPECT_EQ(t.beyond_targets, 1);
+  EXPECT_EQ(t.ignored_estimates, 1);
+  EXPECT_FALSE(t.estimates[3].taking_part);
+  EXPECT_TRUE(t.estimates[3].in_split);
+  EXPECT_DOUBLE_EQ(t.pr_curve.back().precision, 1.0);
+
   // Declared symmetric about z, the half turn is right under MSSD and ADD(-S) too.
   ds.models[7].symmetries_discrete = {turn(Eigen::Vector3d::UnitZ(), 180)};
   const EvalReport symmetric = evaluate(ds, models, results);

@@ -8,8 +8,16 @@
 // A ground truth counts as found under a metric when its pair's error is below the threshold. An
 // estimate is a false positive when it has no pair or its pair is not found under ADD-S (the most
 // lenient of the three). Ground truths less visible than min_visib_fract are not targets: they
-// count neither way, nor do estimates that find them.
+// count neither way, nor do estimates that find them. With BOP19 targets (EvalOptions::targets),
+// ground truths of objects not listed for their image are not targets either, and only the
+// inst_count best estimates of each listed object take part (eval/bop_scores: results_taking_part).
+//
+// Precision: the estimates counted (all but those that found an invisible ground truth) are sorted
+// by score; at each distinct score, those scoring at least that much give a precision (correct under
+// ADD-S at correct_fraction, one-to-one as paired above, over counted) and a recall (correct over
+// targets): the precision-recall curve over the detection score.
 #include <map>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -29,6 +37,7 @@ struct EvalOptions {
   /// (the errors change by well under a millimetre; MSSD with 315 symmetry steps stays fast).
   std::size_t max_model_points = 2000;
   double symmetry_step = 0.01;    ///< continuous symmetries in steps of at most this share of a turn x pi (BOP's)
+  std::optional<std::vector<BopTarget>> targets;  ///< BOP19 targets (io/bop: read_bop_targets); none: open mode
 };
 
 /// The object's symmetry transforms from models_info.json (identity first), continuous ones in
@@ -55,10 +64,20 @@ struct Score {
 /// What became of one estimate.
 struct EstimateOutcome {
   bool in_split = false;   ///< its image is in the dataset's split
+  bool taking_part = true; ///< false: beyond the targets (an object not listed, or past inst_count)
+  bool counted = false;    ///< counted among the estimates (Score::estimates)
   bool paired = false;     ///< it was paired with a ground truth of its object
   bool target = false;     ///< ...that is a target (visible enough)
   double add_s_m = -1, add_m = -1, mssd_m = -1;  ///< errors against the pair (-1: none)
   bool correct_add_s = false, correct_add = false;
+};
+
+/// One point of the precision-recall curve: the estimates scoring at least `score`.
+struct PrecisionRecallPoint {
+  double score = 0;
+  int estimates = 0;  ///< counted estimates at or above the score
+  int correct = 0;    ///< of them, correct under ADD-S and paired with a target
+  double recall = 0, precision = 0;
 };
 
 struct EvalReport {
@@ -69,6 +88,11 @@ struct EvalReport {
   int images_timed = 0;             ///< images with a time in the results
   double mean_time_s = 0;           ///< over the timed images
   int ignored_estimates = 0;        ///< estimates for images or objects the dataset does not have
+  int beyond_targets = 0;           ///< estimates in the split left out by the targets
+  /// One point per distinct score of the counted estimates, by decreasing score; the last one is
+  /// the whole report's (recall_add_s, and precision = 1 - false_positives / estimates).
+  std::vector<PrecisionRecallPoint> pr_curve;
+  double false_positives_per_image() const { return images ? static_cast<double>(total.false_positives) / images : 0.0; }
   std::vector<EstimateOutcome> estimates;  ///< one per result, in the order given
 };
 

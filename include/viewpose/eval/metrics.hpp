@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 
+#include "viewpose/core/camera.hpp"
 #include "viewpose/core/transform.hpp"
 
 namespace viewpose {
@@ -15,6 +16,12 @@ double add_error(const Transform& T_estimate, const Transform& T_truth, std::spa
 /// truth, at the best of the model's symmetries (object-frame transforms; include the identity).
 double mssd_error(const Transform& T_estimate, const Transform& T_truth, std::span<const Eigen::Vector3f> model_points,
                   std::span<const Transform> symmetries);
+
+/// MSPD (BOP 2019): the largest distance in pixels between a model point's projections through K
+/// under the estimate and under the truth, at the best of the model's symmetries (as mssd_error).
+/// Points at or behind the camera's plane under either pose count as infinitely far.
+double mspd_error(const Transform& T_estimate, const Transform& T_truth, std::span<const Eigen::Vector3f> model_points,
+                  std::span<const Transform> symmetries, const CameraIntrinsics& K);
 
 /// Angle of R_estimate R_truth^T, degrees.
 double rotation_error_deg(const Eigen::Matrix3d& R_estimate, const Eigen::Matrix3d& R_truth);
