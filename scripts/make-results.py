@@ -20,6 +20,9 @@ from pathlib import Path
 
 import matplotlib
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import results_real  # noqa: E402  (the real frames: scripts/results_real.py)
+
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
@@ -30,7 +33,6 @@ THESIS_STAGES_MS = [  # Table 2, mean +- sd
     ("Descriptor matching", "3 ± 1"), ("CRH alignment", "5 ± 1"),
     ("ICP alignment and hypothesis verification (one match)", "971 ± 79")]
 DISTANCES = [0.75, 1.00, 1.25, 1.50, 2.00]
-YCB_NAMES = {8: "009_gelatin_box", 14: "025_mug", 21: "061_foam_brick"}
 CLUTTER_DIAMETERS_MM = {}  # filled from the clutter dataset's models_info.json
 
 
@@ -148,60 +150,6 @@ def margins(ev, details):
     return out
 
 
-def ycb_dataset(shared, work):
-    """A copy of the YCB-Video sample whose ground truth is moved into the BOP meshes' frame.
-
-    The sample's poses are in the YCB-Video model frame (points.xyz); the BOP meshes are those models
-    moved so that their bounding box is centred (MANIFEST: a few mm). With c the centre of
-    points.xyz's box, p_ycb = p_bop + c, so T_camera_bop = T_camera_ycb * translation(c)."""
-    src = shared / "data" / "ycbv_real_sample"
-    dst = work / "ycbv"
-    if dst.exists():
-        shutil.rmtree(dst)
-    (dst / "data" / "0000").mkdir(parents=True)
-    shutil.copytree(src / "models_bop_ycbv", dst / "models")
-    for f in (src / "data" / "0000").glob("*-depth.png"):
-        (dst / "data" / "0000" / f.name).symlink_to(f)
-    shutil.copy(src / "data" / "0000" / "scene_camera.json", dst / "data" / "0000")
-    centres = {}
-    for obj_id, name in YCB_NAMES.items():
-        pts = [tuple(map(float, l.split())) for l in (src / "models" / name / "points.xyz").read_text().split("\n") if l.strip()]
-        centres[obj_id] = [1000 * 0.5 * (min(p[k] for p in pts) + max(p[k] for p in pts)) for k in range(3)]  # mm
-    gt = json.loads((src / "data" / "0000" / "scene_gt.json").read_text())
-    for entries in gt.values():
-        for e in entries:
-            c = centres.get(e["obj_id"])
-            if c is None:
-                continue
-            R = e["cam_R_m2c"]
-            e["cam_t_m2c"] = [e["cam_t_m2c"][i] + sum(R[3 * i + k] * c[k] for k in range(3)) for i in range(3)]
-    (dst / "data" / "0000" / "scene_gt.json").write_text(json.dumps(gt, indent=1))
-    return dst, centres
-
-
-def real_data(viewpose, shared, work, log):
-    ds, centres = ycb_dataset(shared, work)
-    out = {"centres_mm": centres, "runs": {}}
-    # The three objects in the frames, then all six meshes the sample has (three of them absent).
-    for label, ids in (("3 objects", [8, 14, 21]), ("6 objects", None)):
-        models = work / ("ycb_models_" + label.split()[0])
-        if models.exists():
-            shutil.rmtree(models)
-        models.mkdir()
-        for f in sorted((ds / "models").glob("obj_*.ply")):
-            if ids is None or int(f.stem[4:]) in ids:
-                (models / f.name).symlink_to(f)
-        db = work / f"ycb_{label.split()[0]}.vpdb"
-        run(viewpose, "db", "build", "--bop-models", models, "--unit", "mm", "-o", db, log=log)
-        csv = work / f"ycb_{label.split()[0]}.csv"
-        run(viewpose, "bop", "--db", db, "--dataset", ds, "--split", "data", "-o", csv,
-            "--details", work / f"ycb_{label.split()[0]}.jsonl", log=log)
-        ev_path = work / f"ycb_{label.split()[0]}_eval.json"
-        run(viewpose, "eval", "--dataset", ds, "--split", "data", "--results", csv, "--json", ev_path, log=log)
-        out["runs"][label] = {"eval": json.loads(ev_path.read_text()), "details": read_details(work / f"ycb_{label.split()[0]}.jsonl")}
-    return out
-
-
 def speed_runs(viewpose, work, log):
     """viewpose bench: 100 seed frames on every core and on one, and against a thousand objects."""
     out = {}
@@ -307,19 +255,32 @@ def plot_ranks(curves, out_png):
                 "Share of poses found within the first N matches (thesis figure 18)", out_png)
 
 
-def write_page(path, m, ev, details, db_seconds, curves, margin, real, orientations, log, corrected, clut, speed):
+def write_page(path, m, ev, details, db_seconds, curves, margin, real, orientations, log, corrected, clut, speed, worse):
     L = []
     w = L.append
     w("# Results\n")
     w("Made by `make results` (`scripts/make-results.py`); every number below comes from that one run. Do not edit")
-    w("by hand: run it again.\n")
+    w("by hand: run it again. Real frames come first: the simulator is not the world.\n")
     w(f"- Run: {m['date']}, commit `{m['commit']}`")
     w(f"- Machine: {m['cpu']}, {m['cores']} cores, {m['os']}; no GPU")
-    w(f"- Seed experiment: the built-in detergent jug (27 x 17 x 11 cm, a handle and an off-centre cap; a stand-in")
-    w(f"  for the thesis's Tide bottle) on a table, {orientations} orientations at each distance, Kinect v1 / Xtion")
-    w(f"  sensor model on (docs/SENSOR_MODEL.md); database of the jug, 80 views at 1 m, thesis parameters.\n")
+    w("- Real data: `../shared/data` (its MANIFEST.md says where each capture comes from). Simulated: the")
+    w(f"  Kinect v1 / Xtion sensor model (docs/SENSOR_MODEL.md). Seed experiment: the built-in detergent jug")
+    w(f"  (27 x 17 x 11 cm, a stand-in for the thesis's Tide bottle), {orientations} orientations at each distance.\n")
+    w("## Worse than the previous run\n")
+    if worse:
+        w("The headline numbers (docs/results/headline.json) that this run made worse:\n")
+        for line in worse:
+            w(line)
+        w("")
+    else:
+        w("No headline number (docs/results/headline.json) is worse than in the previous run.\n")
+    if real:
+        results_real.write_real(w, real)
     all_ = ev["all"]
-    w("## Table 1: success at each distance\n")
+    w("## The thesis's experiment, simulated\n")
+    w("One object on a table in front of a fixed camera, as in the thesis: the easy case. These numbers say the")
+    w("pipeline works as the thesis's did, not how it does in a real room (above).\n")
+    w("### Table 1: success at each distance\n")
     w("Success = the object found with the right surface (ADD-S below 10 % of its diameter, 34 mm). ADD also asks")
     w("for the right way round (handle where the handle is). The thesis judged success by eye on real frames; its")
     w("false positives were none, false negatives 1 at 1.25 m and 4 at 1.50 m.\n")
@@ -344,7 +305,7 @@ def write_page(path, m, ev, details, db_seconds, curves, margin, real, orientati
         w("symmetry.\n")
     w("![success against distance](results/success_vs_distance.png)\n")
 
-    w("## Targets of issue 6 and where they stand\n")
+    w("### Targets of issue 6 and where they stand\n")
     targets = [(0.75, 0.99), (1.00, 0.99), (1.25, 0.99), (1.50, 0.95), (2.00, 0.85)]
     w("| distance | target (ADD-S) | measured | met |")
     w("|---|---|---|---|")
@@ -357,7 +318,7 @@ def write_page(path, m, ev, details, db_seconds, curves, margin, real, orientati
     w(f"\nFalse positives over the whole experiment: {all_['false_positives']} (target 0).\n")
 
     stages, per_hyp, mean_hyp = stage_table(details)
-    w("## Table 2: time of each stage, per frame\n")
+    w("### Table 2: time of each stage, per frame\n")
     w("Median and mean over every frame of the seed experiment, milliseconds, as `viewpose bop` measured them")
     w(f"({m['cores']} cores, both working on each frame). ICP and verification run once per hypothesis (a CRH roll of a")
     w(f"match); a frame tried {mean_hyp:.1f} hypotheses on average, {per_hyp:.2f} ms each (median). The thesis's")
@@ -443,36 +404,6 @@ def write_page(path, m, ev, details, db_seconds, curves, margin, real, orientati
     w("and a global descriptor of a merged cluster describes no object. The false positives here are the")
     w("known objects' poses fitted to clutter or to the wrong part of a pile: the target is none.\n")
 
-    w("## Real data: YCB-Video, Asus Xtion\n")
-    if real is None:
-        w("Skipped: ../shared/data/ycbv_real_sample is not there.\n")
-    else:
-        c = real["centres_mm"]
-        w("Two real frames (`../shared/data/ycbv_real_sample`, about 0.6 m) with a gelatin box, a mug and a foam brick;")
-        w("the mug and the brick touch. The ground truth is in the YCB-Video model frame; the BOP meshes are those models")
-        w("re-centred, so the truth is moved by the centre of each `points.xyz` box (mm: " +
-          ", ".join(f"{k}: ({v[0]:.1f}, {v[1]:.1f}, {v[2]:.1f})" for k, v in sorted(c.items())) + ") before scoring.\n")
-        w("Depth alone cannot tell these three objects' sides apart: the gelatin box is a plain box (its printing")
-        w("tells the sides, and BOP lists no symmetry for it), the mug's handle is out of sight in both frames, and")
-        w("the brick's cross-section is nearly square. So the surface is right (ADD-S) while the pose is one of the")
-        w("shape's equivalent ones (ADD, and MSSD with BOP's symmetries, fail). The second database adds the three")
-        w("other YCB-V meshes of the sample (2: cracker box, 5: mustard bottle, 12: bleach cleanser), none of them in")
-        w("view: whatever it reports of them is a false positive. Desks hold many fragments (cables, paper, a")
-        w("keyboard) that are tried against every object, so each object more costs time.\n")
-        for label, r in real["runs"].items():
-            ev_r = r["eval"]
-            times = [d["times_ms"]["total"] for d in r["details"]]
-            w(f"### Database of {label}\n")
-            w("| object | targets | ADD-S | ADD | ADD(-S) | MSSD | false positives | mean translation error |")
-            w("|---|---|---|---|---|---|---|---|")
-            for obj, sc in sorted(ev_r.get("per_object", {}).items(), key=lambda kv: int(kv[0])):
-                w(f"| {obj} | {sc['targets']} | {pct(sc['recall_add_s'])} | {pct(sc['recall_add'])} | {pct(sc['recall_add_or_s'])} | "
-                  f"{pct(sc['recall_mssd'])} | {sc['false_positives']} | {sc['translation_error_mm']['mean']:.1f} mm |")
-            a = ev_r["all"]
-            w(f"| all | {a['targets']} | {pct(a['recall_add_s'])} | {pct(a['recall_add'])} | {pct(a['recall_add_or_s'])} | "
-              f"{pct(a['recall_mssd'])} | {a['false_positives']} | {a['translation_error_mm']['mean']:.1f} mm |\n")
-            w(f"Time per frame: {', '.join(f'{t / 1000:.2f} s' for t in times)}.\n")
-
     w("## Commands this run used\n")
     w("```")
     for cmd, seconds in log:
@@ -504,15 +435,31 @@ def main():
     clut = clutter(viewpose, work, a.clutter_images, log)
     speed = speed_runs(viewpose, work, log)
     real = None
-    if (shared / "data" / "ycbv_real_sample").is_dir():
-        real = real_data(viewpose, shared, work, log)
+    if (shared / "data").is_dir():
+        real = results_real.run_all(lambda *args: run(viewpose, *args, log=log), shared, work)
     else:
-        print(f"make-results: {shared}/data/ycbv_real_sample not found; the real-data section is skipped")
+        print(f"make-results: {shared}/data not found; the real-data sections are skipped")
+    headline_path = out.parent / "results" / "headline.json"
+    before = json.loads(headline_path.read_text()) if headline_path.exists() else {}
+    now = results_real.headline(real) if real else {}
+    now.update({"seed_recall_add_s": ev["all"]["recall_add_s"], "seed_recall_add": ev["all"]["recall_add"],
+                "seed_false_positives": ev["all"]["false_positives"],
+                "bench_median_ms": speed["all cores"]["stages_ms"]["total"]["median"],
+                "bench_p95_ms": speed["all cores"]["stages_ms"]["total"]["p95"]})
+    worse = results_real.worse_than_before(now, before)
+    if real and real.get("dev"):
+        pr_curves = {"ycbv_real_dev, open mode": real["dev"]["open"]["eval"].get("pr_curve")}
+        if real.get("sample"):
+            pr_curves["ycbv_real_sample, 6 objects"] = real["sample"]["runs"]["6 objects"]["eval"].get("pr_curve")
+        results_real.plot_precision_recall(pr_curves, out.parent / "results" / "precision_recall_real.png",
+                                           "Real YCB-Video frames: precision against recall")
     plot_success(ev, out.parent / "results" / "success_vs_distance.png")
     plot_ranks(curves, out.parent / "results" / "found_vs_matches.png")
     tmp = out.with_suffix(".md.tmp")
-    write_page(tmp, m, ev, details, db_seconds, curves, margin, real, a.orientations, log, corrected, clut, speed)
+    write_page(tmp, m, ev, details, db_seconds, curves, margin, real, a.orientations, log, corrected, clut, speed, worse)
     tmp.replace(out)
+    now["source"] = f"make results at {m['commit']}, {m['date']}"
+    headline_path.write_text(json.dumps(now, indent=1, sort_keys=True) + "\n")
     print(f"wrote {out} and {out.parent / 'results'}/*.png")
 
 
