@@ -44,14 +44,23 @@ struct Support {
   double clearance = 0;
 };
 
+// A flat part of a piece of furniture (a shelf board, a seat, a top), in the furniture's frame.
+struct SupportArea {
+  Transform T_furniture_support;
+  PlanRect area;
+  double clearance = 0;
+};
+
 // A piece of furniture in its own frame: centred on x, its back at +y (against a wall), its
-// front at -y, standing on z = 0. `supports` are in the same frame.
+// front at -y, standing on z = 0.
 struct Furniture {
   std::string kind;
   TriangleMesh mesh;
   double width = 0, depth = 0;
-  std::vector<std::pair<Transform, std::pair<PlanRect, double>>> supports;  // pose, area, clearance
+  std::vector<SupportArea> supports;
 };
+
+Transform lifted(double z) { return make_transform(Eigen::Matrix3d::Identity(), {0, 0, z}); }
 
 Furniture make_shelf(std::mt19937_64& rng) {
   Furniture f{"shelf", {}, draw(rng, 0.6, 1.1), draw(rng, 0.28, 0.4), {}};
@@ -67,7 +76,7 @@ Furniture make_shelf(std::mt19937_64& rng) {
     add_box(f.mesh, {0, -0.005, z + t / 2}, {w - 2 * t, d - 0.01, t});
     if (k < boards) {
       const PlanRect area{-w / 2 + t, -d / 2, w / 2 - t, d / 2 - 0.01};
-      f.supports.push_back({make_transform(Eigen::Matrix3d::Identity(), {0, 0, z + t}), {area, pitch - t}});
+      f.supports.push_back({lifted(z + t), area, pitch - t});
     }
   }
   return f;
@@ -79,7 +88,7 @@ Furniture make_cabinet(std::mt19937_64& rng) {
   add_box(f.mesh, {0, 0.01, 0.04}, {w - 0.04, d - 0.02, 0.08});  // a recessed plinth
   add_box(f.mesh, {0, 0, 0.08 + (h - 0.08) / 2}, {w, d, h - 0.08});
   add_box(f.mesh, {0, -d / 2 - 0.012, h - 0.1}, {std::min(0.15, w / 3), 0.024, 0.02});  // a handle
-  f.supports.push_back({make_transform(Eigen::Matrix3d::Identity(), {0, 0, h}), {{-w / 2, -d / 2, w / 2, d / 2}, 1.0}});
+  f.supports.push_back({lifted(h), {-w / 2, -d / 2, w / 2, d / 2}, 1.0});
   return f;
 }
 
@@ -91,7 +100,7 @@ Furniture make_chair(std::mt19937_64& rng) {
   add_box(f.mesh, {0, 0, seat - 0.015}, {s, s, 0.03});
   for (const double x : {-1.0, 1.0}) add_box(f.mesh, {x * (s / 2 - leg / 2), s / 2 - leg / 2, seat + back / 2}, {leg, leg, back});
   add_box(f.mesh, {0, s / 2 - leg / 2, seat + back - 0.1}, {s, 0.02, 0.2});  // the backrest
-  f.supports.push_back({make_transform(Eigen::Matrix3d::Identity(), {0, 0, seat}), {{-s / 2, -s / 2, s / 2, s / 2 - leg}, 0.6}});
+  f.supports.push_back({lifted(seat), {-s / 2, -s / 2, s / 2, s / 2 - leg}, 0.6});
   return f;
 }
 
@@ -99,7 +108,7 @@ Furniture make_carton(std::mt19937_64& rng) {
   Furniture f{"carton", {}, draw(rng, 0.25, 0.6), draw(rng, 0.2, 0.5), {}};
   const double h = draw(rng, 0.15, 0.5);
   add_box(f.mesh, {0, 0, h / 2}, {f.width, f.depth, h});
-  f.supports.push_back({make_transform(Eigen::Matrix3d::Identity(), {0, 0, h}), {{-f.width / 2, -f.depth / 2, f.width / 2, f.depth / 2}, 1.0}});
+  f.supports.push_back({lifted(h), {-f.width / 2, -f.depth / 2, f.width / 2, f.depth / 2}, 1.0});
   return f;
 }
 
@@ -334,9 +343,7 @@ Room make_room(const RoomOptions& o, std::uint64_t seed) {
       if (!clear) continue;
       taken.push_back(plan);
       const Transform T_world_furniture = standing_at(x, y, F, yaw);
-      for (const auto& [pose, area_clearance] : f.supports) {
-        supports.push_back({T_world_furniture * pose, Footprints(area_clearance.first), area_clearance.second});
-      }
+      for (const SupportArea& a : f.supports) supports.push_back({T_world_furniture * a.T_furniture_support, Footprints(a.area), a.clearance});
       room.meshes.push_back({f.kind, std::make_shared<const TriangleMesh>(std::move(f.mesh)), T_world_furniture});
       ++room.furniture;
       break;

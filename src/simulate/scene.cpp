@@ -9,7 +9,6 @@
 
 #include "viewpose/core/error.hpp"
 #include "viewpose/render/rasterizer.hpp"
-#include "viewpose/render/shapes.hpp"
 
 namespace viewpose {
 
