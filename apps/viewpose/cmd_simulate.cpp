@@ -52,6 +52,28 @@ void write_contact_sheet(const fs::path& dataset, const std::string& split, cons
   write_rgb_png(out, tile_images(tiles, 4));
 }
 
+namespace {
+
+// The unknown objects of a room: the user's --distractor meshes, and the built-in shapes that are
+// not known objects (a known one among the distractors would be an object with no ground truth).
+std::vector<std::shared_ptr<const TriangleMesh>> distractor_meshes(const std::vector<std::string>& models,
+                                                                   const std::vector<std::string>& distractors, LengthUnit unit) {
+  for (const std::string& d : distractors) {
+    if (std::find(models.begin(), models.end(), d) != models.end()) {
+      throw Error(fmt::format("simulate: {} is a --model and a --distractor; a known object has ground truth", d));
+    }
+  }
+  std::vector<std::string> names = distractors;
+  for (const std::string& shape : shape_names()) {
+    if (std::find(models.begin(), models.end(), shape) == models.end()) names.push_back(shape);
+  }
+  std::vector<std::shared_ptr<const TriangleMesh>> out;
+  for (ObjectModel& m : load_models(names, unit)) out.push_back(std::make_shared<const TriangleMesh>(std::move(m.mesh)));
+  return out;
+}
+
+}  // namespace
+
 void add_simulate_command(CLI::App& app, int& exit_code) {
   struct Options {
     std::string preset = "seed-experiment";
@@ -63,13 +85,20 @@ void add_simulate_command(CLI::App& app, int& exit_code) {
     int orientations = 20;
     std::vector<double> distances{0.75, 1.00, 1.25, 1.50, 2.00};
     int images = 20;
+    bool room = false;
+    int rooms = 4;
+    double empty_fraction = 0.2;
+    std::vector<std::string> distractors;
     std::string contact_sheet, fakenect;
     CameraFlags camera;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("simulate", "Render synthetic depth frames with exact ground truth as a BOP dataset");
-  cmd->add_option("--preset", o->preset, "seed-experiment (the thesis's set-up) or clutter")
-      ->check(CLI::IsMember({"seed-experiment", "clutter"}))
+  cmd->add_option("--preset", o->preset,
+                  "seed-experiment (the thesis's set-up: one object at each distance), clutter (2-5 objects touching "
+                  "on a table) or room (known objects among unknown ones on a room's table, seen from a few heights, "
+                  "and frames with no known object)")
+      ->check(CLI::IsMember({"seed-experiment", "clutter", "room"}))
       ->capture_default_str();
   cmd->add_option("-o,--out", o->out, "Dataset folder to write")->required();
   cmd->add_option("--model", o->models, "Objects: jug, box, can, mug, or mesh files (repeat for several)")
@@ -81,13 +110,29 @@ void add_simulate_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_option("--distances", o->distances, "seed-experiment: distances in metres")->delimiter(',')->capture_default_str();
-  cmd->add_option("--images", o->images, "clutter: number of images")->check(CLI::Range(1, 100000))->capture_default_str();
+  cmd->add_option("--images", o->images, "clutter, room: number of images (room: dealt to the rooms in turn)")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  cmd->add_flag("--room", o->room,
+                "seed-experiment, clutter: put the table in a room (a finite table on legs, walls and floor 1.5-4 m away, "
+                "furniture, unknown objects on and off the table, none in front of a known one); the known objects' "
+                "poses stay as without it");
+  cmd->add_option("--rooms", o->rooms, "room: number of rooms (one scene each)")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("--empty-fraction", o->empty_fraction, "room: share of the frames with no known object in them")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--distractor", o->distractors,
+                  "room, --room: a mesh file (or built-in shape) of an unknown object to scatter too (repeat for several; "
+                  "--unit applies). The built-in shapes that are not a --model are scattered anyway");
   cmd->add_option("--contact-sheet", o->contact_sheet, "Also write a PNG of a few frames, to look at");
   cmd->add_option("--fakenect", o->fakenect,
                   "Also write the frames, in order, as a fakenect recording (raw Kinect disparity) to replay through "
                   "libfreenect: viewpose live --source freenect with FAKENECT_PATH=DIR");
   o->camera.add_to(*cmd);
-  cmd->footer("The camera defaults to a Kinect v1 / Xtion at VGA (fx = fy = 525).");
+  cmd->footer(
+      "The camera defaults to a Kinect v1 / Xtion at VGA (fx = fy = 525). Rooms (--preset room, --room) put only the "
+      "--models in the ground truth; walls, furniture and unknown objects are background, and visib_fract counts what "
+      "they hide. docs/SENSOR_MODEL.md says what the sensor model does at a room's 3-4 m.");
   cmd->callback([o, &exit_code] {
     const auto start = std::chrono::steady_clock::now();
     CameraIntrinsics K = CameraIntrinsics::kinect_v1();
@@ -99,6 +144,11 @@ void add_simulate_command(CLI::App& app, int& exit_code) {
       }
     }
     const std::vector<ObjectModel> objects = load_models(o->models, parse_length_unit(o->unit));
+    if (o->room && o->preset == "room") throw Error("simulate: --room is for seed-experiment and clutter; the room preset has rooms already");
+    const bool rooms = o->room || o->preset == "room";
+    if (!rooms && !o->distractors.empty()) throw Error("simulate: --distractor needs --preset room or --room");
+    RoomOptions room;
+    if (rooms) room.distractor_meshes = distractor_meshes(o->models, o->distractors, parse_length_unit(o->unit));
     SimDataset ds;
     if (o->preset == "seed-experiment") {
       if (objects.size() != 1) throw Error("simulate: the seed experiment takes exactly one --model");
@@ -106,11 +156,19 @@ void add_simulate_command(CLI::App& app, int& exit_code) {
       se.orientations = o->orientations;
       se.distances_m = o->distances;
       ds = make_seed_experiment(objects[0], K, se, o->seed);
-    } else {
+    } else if (o->preset == "clutter") {
       ClutterOptions cl;
       cl.images = o->images;
       ds = make_clutter(objects, K, cl, o->seed);
+    } else {
+      RoomPresetOptions ro;
+      ro.rooms = o->rooms;
+      ro.images = o->images;
+      ro.empty_fraction = o->empty_fraction;
+      ro.room = room;
+      ds = make_room_scenes(objects, K, ro, o->seed);
     }
+    if (o->room) put_in_room(ds, room, o->seed);
     BopWriteOptions wo;
     wo.seed = o->seed;
     if (o->no_noise) wo.sensor = SensorModel::ideal();

@@ -55,6 +55,29 @@ run(FALSE simulate --preset seed-experiment --model jug --model can -o "${WORK}/
 expect_in("${ERR}" "exactly one --model")
 run(FALSE simulate --model "${WORK}/no-such-mesh.obj" -o "${WORK}/y")
 expect_in("${ERR}" "no-such-mesh.obj: no such file")
+# Rooms: known objects among unknown ones, negative frames with no ground truth, a user's distractor;
+# the fixed-camera presets in a room; wrong combinations refused.
+run(TRUE simulate --preset room --model jug --model box --images 4 --rooms 2 --empty-fraction 0.5 --seed 2
+    --distractor "${WORK}/clutter/models/obj_000002.ply" --unit mm -o "${WORK}/room" --contact-sheet "${WORK}/room.png")
+expect_in("${OUT}" "scene 000002: 2 images")
+expect_in("${OUT}" "without a known object; room: walls")
+run(TRUE info "${WORK}/room")
+expect_in("${OUT}" "split 'test': 2 scenes, 4 images")
+file(READ "${WORK}/room/test/000001/scene_gt.json" room_gt)
+file(READ "${WORK}/room/test/000002/scene_gt.json" room_gt2)
+string(FIND "${room_gt}${room_gt2}" "[]" empty_at)
+if(empty_at EQUAL -1 OR NOT EXISTS "${WORK}/room.png")
+  message(FATAL_ERROR "the room preset wrote no negative frame or no contact sheet:\n${room_gt}${room_gt2}")
+endif()
+run(TRUE simulate --preset clutter --room --model jug --model can --images 2 -o "${WORK}/clutter_room")
+expect_in("${OUT}" "clutter: objects touching and partly hiding each other; room: walls")
+run(FALSE simulate --preset room --room -o "${WORK}/x")
+expect_in("${ERR}" "--room is for seed-experiment and clutter")
+run(FALSE simulate --preset clutter --distractor can -o "${WORK}/x")
+expect_in("${ERR}" "--distractor needs --preset room or --room")
+run(FALSE simulate --preset room --model jug --distractor jug -o "${WORK}/x")
+expect_in("${ERR}" "is a --model and a --distractor")
+run(FALSE simulate --preset room --empty-fraction 1.5 -o "${WORK}/x")
 
 # A view database from built-in shapes, and its summary.
 run(TRUE db build jug can --views 20 -o "${WORK}/objects.vpdb")

@@ -1,5 +1,6 @@
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -150,6 +151,78 @@ TEST(SensorModel, RangeLimitsAndGrazingAnglesLoseData) {
   }
   EXPECT_GT(low, 100);
   EXPECT_GT(high, 100);
+}
+
+TEST(SensorModel, AtARoomsThreeToFourMetresNoiseAndStepsAreTheDevices) {
+  // docs/SENSOR_MODEL.md, "Rooms and the far range". Walls of a room stand 3-4 m away. There the
+  // model's sigma (Nguyen 2012, whose measurements stop near 3 m) is 14.0, 19.5 and 25.8 mm at 3,
+  // 3.5 and 4 m; Khoshelham & Elberink 2012, who measured out to 5 m, give 1.43 mm/m^2 z^2: 12.9,
+  // 17.5 and 22.9 mm. The 1/8-pixel disparity steps are 28.6, 38.9 and 50.8 mm: coarser than the
+  // noise, so the output takes few levels, each a whole number of steps.
+  const TriangleMesh wall = test::square(10.0f);
+  const SensorModel m = SensorModel::kinect_v1();
+  for (const double z : {3.0, 3.5, 4.0}) {
+    const DepthImage d = simulate_sensor(wall_at(z, wall), K, m, 17);
+    const auto [mean, sigma] = stats(d);
+    const double model = axial_noise_sigma(z, 0.0), measured_by_khoshelham = 1.43e-3 * z * z;
+    EXPECT_NEAR(sigma, model, 0.2 * model) << "at " << z << " m";
+    EXPECT_NEAR(sigma, measured_by_khoshelham, 0.25 * measured_by_khoshelham) << "at " << z << " m";
+    EXPECT_NEAR(mean, z, 0.1 * model) << "noise should be unbiased at " << z << " m";
+    // The levels seen: whole numbers of 1/8-pixel disparity, neighbours one step apart.
+    std::vector<float> levels;
+    for (int v = 140; v < 340; ++v)
+      for (int u = 220; u < 420; ++u)
+        if (std::isfinite(d.at(u, v))) levels.push_back(d.at(u, v));
+    std::sort(levels.begin(), levels.end());
+    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+    EXPECT_GE(levels.size(), 3u);
+    EXPECT_LE(levels.size(), 12u) << "at " << z << " m";
+    for (std::size_t i = 0; i < levels.size(); ++i) {
+      const double disparity = K.fx * m.baseline_m / levels[i];
+      EXPECT_NEAR(disparity * 8, std::round(disparity * 8), 2e-3) << levels[i];
+      if (i == 0) continue;
+      const double mid = 0.5 * (levels[i] + levels[i - 1]);
+      EXPECT_NEAR(levels[i] - levels[i - 1], quantization_step(mid, K.fx, m), 0.03 * quantization_step(mid, K.fx, m));
+    }
+  }
+  EXPECT_NEAR(quantization_step(3.0, K.fx, m), 9.0 / (8 * 525 * 0.075), 1e-12);
+}
+
+TEST(SensorModel, TheRangeEndsAtFourAndAHalfMetresWithNoiseStraddlingIt) {
+  // With all effects on: a wall at 4.3 m (6 sigma inside the limit) is all there, less the 0.2 %
+  // random dropouts; at 4.7 m nothing is. At 4.5 m what stays is what the noise leaves on the near
+  // side of the disparity level boundary above 4.5 m: 4.5 m is itself a level (70/8 px), and every
+  // depth that rounds to it (up to 4.532 m) is kept.
+  const TriangleMesh wall = test::square(12.0f);
+  const SensorModel m = SensorModel::kinect_v1();
+  const double pixels = 640.0 * 480.0;
+  EXPECT_GT(simulate_sensor(wall_at(4.3, wall), K, m, 2).count_valid() / pixels, 0.99);
+  EXPECT_LT(simulate_sensor(wall_at(4.7, wall), K, m, 2).count_valid() / pixels, 0.001);
+  const double fb = K.fx * m.baseline_m;
+  ASSERT_NEAR(fb / 4.5 * 8, 70.0, 1e-9);
+  const double boundary = fb / (69.5 / 8);  // depths beyond round to the next level, 69/8 px
+  const double q = quantization_step(4.5, K.fx, m), sigma = axial_noise_sigma(4.5, 0.0);
+  const double gaussian = std::sqrt(sigma * sigma - q * q / 12);  // what the model adds before quantizing
+  const double kept = 0.5 * std::erfc(-(boundary - 4.5) / (gaussian * std::sqrt(2.0))) * (1 - m.dropout_probability);
+  EXPECT_NEAR(simulate_sensor(wall_at(4.5, wall), K, m, 2).count_valid() / pixels, kept, 0.01);
+}
+
+TEST(SensorModel, ShadowsAtThreeToFourMetresAreNarrow) {
+  // A card at 3 m before a wall at 4 m: the projector's shadow is fx b (1/3 - 1/4) = 3.3 pixels.
+  const TriangleMesh wall = test::square(10.0f), card = test::square(0.4f);
+  const MeshInstance scene[] = {{&wall, make_transform(Eigen::Matrix3d::Identity(), {0, 0, 4.0})},
+                                {&card, make_transform(Eigen::Matrix3d::Identity(), {0, 0, 3.0})}};
+  RenderOptions o;
+  o.normals = true;
+  SensorModel m = SensorModel::ideal();
+  m.shadows = true;
+  const DepthImage d = simulate_sensor(render(scene, K, o), K, m, 1);
+  const int card_left = static_cast<int>(std::ceil(K.cx - K.fx * 0.2 / 3.0));
+  for (const int v : {200, 240, 280}) {
+    int shadow = 0;
+    for (int u = 0; u < card_left; ++u) shadow += std::isfinite(d.at(u, v)) ? 0 : 1;
+    EXPECT_NEAR(shadow, K.fx * 0.075 * (1 / 3.0 - 1 / 4.0), 1.5) << "row " << v;
+  }
 }
 
 TEST(SensorModel, RefusesFramesWithoutNormals) {

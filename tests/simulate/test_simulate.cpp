@@ -49,7 +49,7 @@ TEST(Simulate, SeedExperimentPutsTheNearestSurfaceAtEachDistance) {
     }
     // And the closest pixel the camera sees on the object agrees, within the pixel spacing.
     SimDataset object_only = ds;
-    object_only.table = {};
+    object_only.background.clear();
     const SimulatedFrame f = simulate_image(object_only, ds.scenes[s].images[0], SensorModel::ideal(), 1);
     const PointCloud cloud = depth_to_cloud(f.depth, K);
     const Transform& T = ds.scenes[s].images[0].objects[0].T_camera_object;

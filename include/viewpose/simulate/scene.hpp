@@ -1,7 +1,13 @@
 #pragma once
 // Synthetic scenes with exact ground truth: objects placed on a table in front of a camera,
 // rendered, passed through the sensor model, and measured for visibility as BOP defines it.
+//
+// The presets share one world frame: z up, the table top is the plane z = 0, the camera stands
+// above the origin and looks along +y. A scene may hold a room around the table (simulate/room.hpp):
+// everything in it is background, rendered and hiding the known objects, but never ground truth.
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +18,7 @@
 #include "viewpose/core/transform.hpp"
 #include "viewpose/io/bop.hpp"
 #include "viewpose/render/sensor_model.hpp"
+#include "viewpose/simulate/room.hpp"
 
 namespace viewpose {
 
@@ -20,8 +27,21 @@ struct ObjectPlacement {
   Transform T_camera_object = Transform::Identity();
 };
 
+/// A mesh that is seen but is not a known object: the table, a room's walls, floor and furniture,
+/// unknown objects (distractors). It hides known objects and the sensor sees it; it has no ground
+/// truth. Meshes are shared, so that the images of one room cost one copy of it.
+struct BackgroundMesh {
+  std::string kind;  ///< "table", "wall", "floor", "shelf", "distractor", ... (see room.hpp)
+  std::shared_ptr<const TriangleMesh> mesh;
+  Transform T_camera_mesh = Transform::Identity();
+};
+
 struct SimImage {
-  std::vector<ObjectPlacement> objects;
+  SimImage() = default;
+  SimImage(std::vector<ObjectPlacement> objects_, std::vector<BackgroundMesh> background_ = {})
+      : objects(std::move(objects_)), background(std::move(background_)) {}
+  std::vector<ObjectPlacement> objects;    ///< the known objects: the image's ground truth
+  std::vector<BackgroundMesh> background;  ///< seen in this image only, besides the dataset's
 };
 
 struct SimScene {
@@ -33,8 +53,9 @@ struct SimScene {
 struct SimDataset {
   CameraIntrinsics K;
   std::vector<ObjectModel> objects;
-  TriangleMesh table;  ///< the support surface seen in every image (may be empty)
-  Transform T_camera_table = Transform::Identity();
+  std::vector<BackgroundMesh> background;  ///< seen in every image (the table, when the camera does not move)
+  /// The camera in the presets' world frame, for presets whose camera does not move.
+  std::optional<Transform> T_world_camera;
   std::vector<SimScene> scenes;
 };
 
@@ -62,12 +83,39 @@ struct ClutterOptions {
 SimDataset make_clutter(const std::vector<ObjectModel>& objects, const CameraIntrinsics& K, const ClutterOptions& options,
                         std::uint64_t seed);
 
+/// Puts a fixed-camera preset (the seed experiment, clutter) in a room: its endless table gives way
+/// to the room's finite one, grown to hold every known object, with walls, floor, furniture and
+/// unknown objects around it; each image also gets its own unknown objects on the table, kept out
+/// of the camera's line of sight to the known ones (so that the preset measures what it did, now
+/// with a room behind it). The known objects' poses do not change. Throws viewpose::Error for a
+/// dataset with no fixed camera.
+void put_in_room(SimDataset& dataset, const RoomOptions& options, std::uint64_t seed);
+
+/// Rooms as a robot sees them: known objects on a room's table among unknown ones, in piles where
+/// they touch and hide each other, seen from a few camera heights, each camera turned towards the
+/// pile; and negative frames, with no known object anywhere, half of them looking at the table
+/// (with only unknown things on it) and half turned away to the walls and furniture. One scene per
+/// room; its images share the room, each with its own camera and its own things on the table.
+struct RoomPresetOptions {
+  int rooms = 4;
+  int images = 20;  ///< in all, dealt to the rooms in turn
+  int min_objects = 1, max_objects = 4;  ///< known objects in an image that has any
+  double empty_fraction = 0.2;  ///< share of the images with no known object (rounded to whole images)
+  std::vector<double> camera_heights_m = {0.30, 0.45, 0.65, 0.90};  ///< above the table top, drawn per image
+  double pile_fraction = 0.75;  ///< chance that a thing on the table is put touching one already there
+  RoomOptions room;             ///< the rooms; their table distractors are drawn per image
+};
+SimDataset make_room_scenes(const std::vector<ObjectModel>& objects, const CameraIntrinsics& K,
+                            const RoomPresetOptions& options, std::uint64_t seed);
+
 /// One image as the sensor reports it, with its ground truth.
 struct SimulatedFrame {
   DepthImage depth;
   std::vector<GroundTruthPose> gt;
   std::vector<GroundTruthInfo> gt_info;  ///< visib_fract = visible pixels / pixels of the object alone
 };
+/// Renders the image's known objects, then the dataset's background, then the image's: all of it
+/// hides the known objects, and visibility is measured against each object rendered alone.
 SimulatedFrame simulate_image(const SimDataset& dataset, const SimImage& image, const SensorModel& sensor,
                               std::uint64_t seed);
 
