@@ -90,7 +90,7 @@ void add_eval_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--split", o->split, "Split folder")->capture_default_str();
   cmd->add_option("--models-dir", o->models_dir,
                   "Folder of the obj_NNNNNN.ply models and models_info.json, under the dataset (default: models_eval "
-                  "when the dataset has it, as the BOP toolkit scores, else models)");
+                  "when the dataset has it, as the BOP toolkit scores, else models, or T-LESS's models_cad)");
   cmd->add_option("--results", o->results, "BOP19 CSV (viewpose bop -o)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--threshold", o->fraction, "ADD and ADD-S: correct below this share of the object's diameter")
       ->check(CLI::Range(0.001, 1.0))
@@ -104,9 +104,10 @@ void add_eval_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--json", o->json, "Write the scores as JSON");
   cmd->callback([o, &exit_code] {
-    if (o->models_dir.empty())
-      o->models_dir = std::filesystem::is_directory(std::filesystem::path(o->dataset) / "models_eval") ? "models_eval" : "models";
-    const BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
+    // By default the models the BOP toolkit scores with (models_eval, else what recognition reads:
+    // models, or T-LESS's models_cad); a folder asked for by name, that one.
+    const BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir.empty() ? "models" : o->models_dir});
+    if (o->models_dir.empty()) o->models_dir = ds.eval_models_dir;
     std::vector<std::string> notes = ds.notes;
     const std::vector<BopResult> results = read_bop_results(o->results, &notes);
     for (const std::string& note : notes) fmt::print(stderr, "viewpose: note: {}\n", note);
