@@ -1,10 +1,13 @@
 #!/usr/bin/python3
-"""Runs the thesis's experiment and the real-data check end to end and writes docs/RESULTS.md.
+"""Measures viewpose end to end and writes docs/RESULTS.md: real frames first, then simulated rooms,
+then the thesis's experiment, its speed and its variants.
 
-Every number on the page comes from this run: the database is built, the seed experiment is
-simulated, recognized with `viewpose bop` and scored with `viewpose eval`; the real YCB-Video
-frames in ../shared/data are recognized and scored the same way when they are present. Plots go
-to docs/results/. Usage (from the repository, after a build): make results
+Every number on the page comes from this run, through the viewpose command alone: databases are
+built, datasets recognized with `viewpose bop` (or `recognize`) and scored with `viewpose eval`.
+The real frames (scripts/results_real.py) are those in ../shared/data, skipped when it is absent;
+the rooms (scripts/results_rooms.py) and the seed experiment are simulated here. Plots go to
+docs/results/, and docs/results/headline.json keeps this run's headline numbers for the next run
+to compare with. Usage (from the repository, after a build): make results
 """
 import argparse
 import datetime
@@ -22,6 +25,7 @@ import matplotlib
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import results_real  # noqa: E402  (the real frames: scripts/results_real.py)
+import results_rooms  # noqa: E402  (the simulated rooms: scripts/results_rooms.py)
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -255,7 +259,7 @@ def plot_ranks(curves, out_png):
                 "Share of poses found within the first N matches (thesis figure 18)", out_png)
 
 
-def write_page(path, m, ev, details, db_seconds, curves, margin, real, orientations, log, corrected, clut, speed, worse):
+def write_page(path, m, ev, details, db_seconds, curves, margin, real, rooms, orientations, log, corrected, clut, speed, worse):
     L = []
     w = L.append
     w("# Results\n")
@@ -276,6 +280,7 @@ def write_page(path, m, ev, details, db_seconds, curves, margin, real, orientati
         w("No headline number (docs/results/headline.json) is worse than in the previous run.\n")
     if real:
         results_real.write_real(w, real)
+    results_rooms.write_rooms(w, rooms, DISTANCES)
     all_ = ev["all"]
     w("## The thesis's experiment, simulated\n")
     w("One object on a table in front of a fixed camera, as in the thesis: the easy case. These numbers say the")
@@ -419,6 +424,7 @@ def main():
     ap.add_argument("--shared", default=os.environ.get("VIEWPOSE_SHARED_DIR", str(ROOT.parent / "shared")))
     ap.add_argument("--orientations", type=int, default=20)
     ap.add_argument("--clutter-images", type=int, default=20)
+    ap.add_argument("--room-images", type=int, default=20)
     ap.add_argument("--out", default=str(ROOT / "docs" / "RESULTS.md"))
     a = ap.parse_args()
     viewpose, work, shared, out = Path(a.viewpose), Path(a.work), Path(a.shared), Path(a.out)
@@ -433,6 +439,8 @@ def main():
     margin = margins(ev, details)
     corrected = corrected_vfh(viewpose, work, log)
     clut = clutter(viewpose, work, a.clutter_images, log)
+    rooms = results_rooms.room_runs(lambda *args: run(viewpose, *args, log=log), work, a.room_images, a.orientations,
+                                    out.parent / "results")
     speed = speed_runs(viewpose, work, log)
     real = None
     if (shared / "data").is_dir():
@@ -442,21 +450,25 @@ def main():
     headline_path = out.parent / "results" / "headline.json"
     before = json.loads(headline_path.read_text()) if headline_path.exists() else {}
     now = results_real.headline(real) if real else {}
+    now.update(results_rooms.headline(rooms))
     now.update({"seed_recall_add_s": ev["all"]["recall_add_s"], "seed_recall_add": ev["all"]["recall_add"],
                 "seed_false_positives": ev["all"]["false_positives"],
                 "bench_median_ms": speed["all cores"]["stages_ms"]["total"]["median"],
                 "bench_p95_ms": speed["all cores"]["stages_ms"]["total"]["p95"]})
     worse = results_real.worse_than_before(now, before)
+    pr_curves = {}
     if real and real.get("dev"):
-        pr_curves = {"ycbv_real_dev, open mode": real["dev"]["open"]["eval"].get("pr_curve")}
-        if real.get("sample"):
-            pr_curves["ycbv_real_sample, 6 objects"] = real["sample"]["runs"]["6 objects"]["eval"].get("pr_curve")
-        results_real.plot_precision_recall(pr_curves, out.parent / "results" / "precision_recall_real.png",
-                                           "Real YCB-Video frames: precision against recall")
+        pr_curves["ycbv_real_dev (real), open mode"] = real["dev"]["open"]["eval"].get("pr_curve")
+    if real and real.get("sample"):
+        pr_curves["ycbv_real_sample (real), 6 objects"] = real["sample"]["runs"]["6 objects"]["eval"].get("pr_curve")
+    pr_curves["simulated rooms"] = rooms["room"]["eval"].get("pr_curve")
+    pr_curves["seed experiment in a room"] = rooms["seed_room"]["eval"].get("pr_curve")
+    results_real.plot_precision_recall(pr_curves, out.parent / "results" / "precision_recall.png",
+                                       "Precision against recall over the detection score")
     plot_success(ev, out.parent / "results" / "success_vs_distance.png")
     plot_ranks(curves, out.parent / "results" / "found_vs_matches.png")
     tmp = out.with_suffix(".md.tmp")
-    write_page(tmp, m, ev, details, db_seconds, curves, margin, real, a.orientations, log, corrected, clut, speed, worse)
+    write_page(tmp, m, ev, details, db_seconds, curves, margin, real, rooms, a.orientations, log, corrected, clut, speed, worse)
     tmp.replace(out)
     now["source"] = f"make results at {m['commit']}, {m['date']}"
     headline_path.write_text(json.dumps(now, indent=1, sort_keys=True) + "\n")

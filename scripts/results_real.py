@@ -237,7 +237,8 @@ def headline(real):
 
 
 # Which way is better for each headline number.
-HIGHER_IS_BETTER = {"ycbv_dev_recall_add_s", "ycbv_dev_ar", "ycbv_sample_recall_add_s", "seed_recall_add_s", "seed_recall_add"}
+HIGHER_IS_BETTER = {"ycbv_dev_recall_add_s", "ycbv_dev_ar", "ycbv_sample_recall_add_s", "seed_recall_add_s", "seed_recall_add",
+                    "room_recall_add_s", "seed_room_recall_add_s"}
 
 
 def worse_than_before(now, before):
@@ -299,7 +300,7 @@ def write_real(w, real):
                 w("annotated one only by chance. VSD compares visible surfaces and does not mind.\n")
         w("Precision against recall as the threshold on the detection score falls (the points of `eval --json`'s")
         w("`pr_curve`): where the curve drops, high-scoring poses are wrong, and no threshold removes them.\n")
-        w("![precision against recall on real frames](results/precision_recall_real.png)\n")
+        w("![precision against recall](results/precision_recall.png)\n")
         w("| object | targets | ADD-S | ADD | ADD(-S) | AR (task) | false positives (open) | mean translation error |")
         w("|---|---|---|---|---|---|---|---|")
         for obj, sc in sorted(ev_open["per_object"].items(), key=lambda kv: int(kv[0])):

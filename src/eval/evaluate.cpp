@@ -164,22 +164,27 @@ EvalReport evaluate(const BopDataset& ds, const std::map<int, std::vector<Eigen:
       time_sum += estimates.front()->time_s;
     }
     std::stable_sort(estimates.begin(), estimates.end(), [](const BopResult* a, const BopResult* b) { return a->score > b->score; });
-    // Pair by decreasing score with the nearest unpaired ground truth of the same object.
+    // Pair as the BOP toolkit matches: by decreasing score, each estimate takes the unpaired ground
+    // truth of its object with the lowest ADD-S, if that is below the threshold. One with none is
+    // wrong and takes nothing, so that a wrong pose cannot keep a right one of lower score from the
+    // object it would find. A wrong estimate's errors are reported against the nearest ground truth
+    // of its object, paired or not, to say how far off it was.
     std::vector<std::optional<Errors>> errors_of_gt(im.gt.size());
     for (const BopResult* e : estimates) {
       const ObjectData& object = objects.at(e->obj_id);
-      std::optional<std::size_t> best;
-      double best_add_s = 0;
+      const double limit = o.correct_fraction * object.diameter_m;
+      std::optional<std::size_t> free, nearest;
+      double free_add_s = 0, nearest_add_s = 0;
       for (std::size_t g = 0; g < im.gt.size(); ++g) {
-        if (im.gt[g].obj_id != e->obj_id || errors_of_gt[g]) continue;
+        if (im.gt[g].obj_id != e->obj_id) continue;
         const double add_s = add_s_error(e->T_camera_object, im.gt[g].T_camera_object, object.points);
-        if (!best || add_s < best_add_s) {
-          best = g;
-          best_add_s = add_s;
-        }
+        if (!nearest || add_s < nearest_add_s) nearest = g, nearest_add_s = add_s;
+        if (!errors_of_gt[g] && (!free || add_s < free_add_s)) free = g, free_add_s = add_s;
       }
+      const bool correct = free && free_add_s < limit;
+      const std::optional<std::size_t> best = correct ? free : nearest;
+      const double best_add_s = correct ? free_add_s : nearest_add_s;
       const bool target = best && is_target(im, *best);
-      const bool correct = best && best_add_s < o.correct_fraction * object.diameter_m;
       EstimateOutcome& outcome = report.estimates[static_cast<std::size_t>(e - results.data())];
       outcome.in_split = true;
       outcome.paired = best.has_value();
@@ -199,12 +204,12 @@ EvalReport evaluate(const BopDataset& ds, const std::map<int, std::vector<Eigen:
       err.mssd = mssd_error(e->T_camera_object, truth, object.points, object.symmetries);
       err.rotation_deg = rotation_error_deg(e->T_camera_object.linear(), truth.linear());
       err.translation_mm = 1000.0 * (e->T_camera_object.translation() - truth.translation()).norm();
-      errors_of_gt[*best] = err;
+      if (correct) errors_of_gt[*best] = err;
       outcome.add_s_m = err.add_s;
       outcome.add_m = err.add;
       outcome.mssd_m = err.mssd;
       outcome.correct_add_s = correct;
-      outcome.correct_add = err.add < o.correct_fraction * object.diameter_m;
+      outcome.correct_add = correct && err.add < limit;
     }
     for (std::size_t g = 0; g < im.gt.size(); ++g) {
       if (!is_target(im, g)) continue;

@@ -71,6 +71,32 @@ BopDataset dataset_with(const std::vector<std::vector<GroundTruthPose>>& gt, dou
   return ds;
 }
 
+// As the BOP toolkit matches: a wrong pose of high score takes nothing, so the right one of lower
+// score still finds the instance (paired by nearest regardless, the wrong one would have used it up).
+TEST(Evaluate, AWrongPoseOfHighScoreDoesNotHideARightOne) {
+  const auto pts = box_corners();
+  const double d = 2 * Eigen::Vector3d(0.1, 0.05, 0.025).norm();
+  const Transform a = turn({0, 1, 0}, 30, {0.0, 0.0, 1.0});
+  const BopDataset ds = dataset_with({{{7, a}}}, d);
+  const std::vector<BopResult> results = {
+      {1, 0, 7, 0.9, a * make_transform(Eigen::Matrix3d::Identity(), {0.3 * d, 0, 0}), 0.02},  // 30 % off: wrong
+      {1, 0, 7, 0.5, a, 0.02},                                                                // right
+  };
+  const EvalReport r = evaluate(ds, {{7, pts}}, results);
+  EXPECT_EQ(r.total.targets, 1);
+  EXPECT_EQ(r.total.found_add_s, 1);
+  EXPECT_EQ(r.total.found_add, 1);
+  EXPECT_EQ(r.total.false_positives, 1);
+  EXPECT_FALSE(r.estimates[0].correct_add_s);
+  EXPECT_TRUE(r.estimates[0].paired);
+  EXPECT_NEAR(r.estimates[0].add_m, 0.3 * d, 1e-9);
+  EXPECT_TRUE(r.estimates[1].correct_add_s);
+  ASSERT_EQ(r.pr_curve.size(), 2u);
+  EXPECT_DOUBLE_EQ(r.pr_curve[0].precision, 0.0);
+  EXPECT_DOUBLE_EQ(r.pr_curve[1].recall, 1.0);
+  EXPECT_DOUBLE_EQ(r.pr_curve[1].precision, 0.5);
+}
+
 TEST(Evaluate, RecallFalsePositivesAndErrorsOnKnownEstimates) {
   const auto pts = box_corners();
   const double d = 2 * Eigen::Vector3d(0.1, 0.05, 0.025).norm();
@@ -109,7 +135,10 @@ TEST(Evaluate, RecallFalsePositivesAndErrorsOnKnownEstimates) {
   EXPECT_TRUE(r.estimates[0].correct_add && r.estimates[0].correct_add_s);
   EXPECT_NEAR(r.estimates[1].add_m, 0.07 * d, 1e-9);
   EXPECT_TRUE(r.estimates[2].correct_add_s && !r.estimates[2].correct_add);
-  EXPECT_FALSE(r.estimates[3].paired);
+  // The second estimate finds nothing left; its errors are against the instance of its kind that is there.
+  EXPECT_TRUE(r.estimates[3].paired);
+  EXPECT_FALSE(r.estimates[3].correct_add_s);
+  EXPECT_GT(r.estimates[3].add_s_m, 0.1 * d);
   EXPECT_FALSE(r.estimates[4].in_split);
   ASSERT_EQ(r.per_scene.size(), 1u);
 

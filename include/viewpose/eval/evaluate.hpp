@@ -3,11 +3,13 @@
 // for the errors it shares with us: ADD and ADD-S recall at a share of the object's diameter, MSSD
 // recall averaged over thresholds, rotation and translation errors, false positives and time.
 //
-// Pairing. In each image, for each object, the estimates are taken by decreasing score; each is
-// paired with the not yet paired ground-truth instance of its object that is nearest under ADD-S.
-// A ground truth counts as found under a metric when its pair's error is below the threshold. An
-// estimate is a false positive when it has no pair or its pair is not found under ADD-S (the most
-// lenient of the three). Ground truths less visible than min_visib_fract are not targets: they
+// Pairing, as the BOP toolkit matches. In each image, for each object, the estimates are taken by
+// decreasing score; each takes the not yet paired ground-truth instance of its object that is
+// nearest under ADD-S, if that is below the threshold (ADD-S is the most lenient of the three). An
+// estimate with none is a false positive and takes nothing: a wrong pose of high score does not keep
+// a right one from the instance it finds. A ground truth counts as found under ADD (MSSD) when the
+// estimate that took it is also within ADD's threshold (MSSD's). A wrong estimate's errors are
+// reported against the nearest instance of its object (EstimateOutcome), to say how far off it was. Ground truths less visible than min_visib_fract are not targets: they
 // count neither way, nor do estimates that find them. With BOP19 targets (EvalOptions::targets),
 // ground truths of objects not listed for their image are not targets either, and only the
 // inst_count best estimates of each listed object take part (eval/bop_scores: results_taking_part).
