@@ -8,7 +8,7 @@
 #   make check          all four, as CI runs them
 #   make bench          micro-benchmarks of each stage, then the pipeline over 100 frames
 #   make bench-pcl      install PCL, and time the thesis's PCL pipeline beside ours, stage by stage
-#   make results        the thesis's experiment and the real-data check; writes docs/RESULTS.md
+#   make results        real frames, simulated rooms, the thesis's experiment; writes docs/RESULTS.md
 #   make pcl-fixtures   install PCL, and regenerate tests/fixtures/pcl from PCL's own code
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 FUZZ_SECONDS ?= 60
