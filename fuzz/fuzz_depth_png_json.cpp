@@ -1,4 +1,4 @@
-// libFuzzer target: a depth PNG with its BOP json. Input layout: byte 0 picks the json kind, bytes
+// libFuzzer target: a depth PNG with its BOP json (or results CSV, or BOP19 targets). Input layout: byte 0 picks the json kind, bytes
 // 1-2 give the json length (little-endian), then the json, then the PNG. When both parse, the
 // frame goes through depth_to_cloud as a real BOP image would.
 #include <cstddef>
@@ -13,7 +13,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 3) return 0;
-  const int kind = data[0] % 6;
+  const int kind = data[0] % 7;
   const std::size_t json_size = std::min<std::size_t>(size - 3, data[1] | (std::size_t{data[2]} << 8));
   const std::string_view json(reinterpret_cast<const char*>(data + 3), json_size);
   const std::span<const std::uint8_t> png(data + 3 + json_size, size - 3 - json_size);
@@ -30,7 +30,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       case 2: (void)parse_scene_gt(json, "scene_gt.json"); break;
       case 3: (void)parse_scene_gt_info(json, "scene_gt_info.json"); break;
       case 4: (void)parse_models_info(json, "models_info.json"); break;
-      default: (void)parse_bop_results(json, "results.csv"); break;
+      case 5: (void)parse_bop_results(json, "results.csv"); break;
+      default: (void)parse_bop_targets(json, "test_targets_bop19.json"); break;
     }
   } catch (const Error&) {
   }

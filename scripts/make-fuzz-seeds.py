@@ -85,7 +85,8 @@ models = {"1": {"diameter": 172.0, "min_x": -50, "min_y": -50, "min_z": -70, "si
                 "size_z": 140, "symmetries_discrete": [[-1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]],
                 "symmetries_continuous": [{"axis": [0, 0, 1], "offset": [0, 0, 0]}]}}
 results = ("scene_id,im_id,obj_id,score,R,t,time\n1,0,1,0.9,1 0 0 0 1 0 0 0 1,0 0 800,0.01\n")
-for kind, doc in enumerate([cam, scene_cam, gt, gt_info, models, results]):
+targets = [{"scene_id": 0, "im_id": 0, "obj_id": 1, "inst_count": 1}, {"scene_id": 0, "im_id": 0, "obj_id": 2, "inst_count": 2}]
+for kind, doc in enumerate([cam, scene_cam, gt, gt_info, models, results, targets]):
     text = (doc if isinstance(doc, str) else json.dumps(doc)).encode()
     write("depth_png_json", f"kind{kind}", bytes([kind]) + struct.pack("<H", len(text)) + text + depth)
 
