@@ -131,6 +131,26 @@ endif()
 file(WRITE "${WORK}/bad_targets.json" "[{\"scene_id\": 7, \"im_id\": 0, \"obj_id\": 1, \"inst_count\": 1}]")
 run(FALSE bop --db "${WORK}/jug.vpdb" --dataset "${WORK}/sim" --targets "${WORK}/bad_targets.json" -o "${WORK}/bad.csv")
 expect_in("${ERR}" "lists scene 7 image 0, which split 'test' does not have")
+# Ground truth as LM-O publishes it: a rotation off orthonormal by 2e-3. info, bop and eval take it as
+# its nearest rotation and say so once; a reflection is refused with the entry named.
+file(COPY "${WORK}/sim/" DESTINATION "${WORK}/lmo_like")
+file(REMOVE "${WORK}/lmo_like/test_targets_bop19.json")
+set(lmo_gt "${WORK}/lmo_like/test/000001/scene_gt.json")
+file(READ "${lmo_gt}" gt_text)
+string(REGEX MATCH "\"cam_R_m2c\": \\[[^]]*\\]" first_rotation "${gt_text}")
+string(REPLACE "${first_rotation}" "\"cam_R_m2c\": [1.002, 0, 0, 0, 1, 0, 0, 0, 1]" rounded_text "${gt_text}")
+file(WRITE "${lmo_gt}" "${rounded_text}")
+run(TRUE info "${WORK}/lmo_like")
+expect_in("${OUT}" "note: ")
+expect_in("${OUT}" "1 rotation is off orthonormal by up to 2.0e-03 (image 0, object 0 the most), taken as the nearest rotation")
+run(TRUE bop --db "${WORK}/jug.vpdb" --dataset "${WORK}/lmo_like" -o "${WORK}/lmo_like.csv")
+expect_in("${ERR}" "viewpose: note: ")
+run(TRUE eval --dataset "${WORK}/lmo_like" --results "${WORK}/lmo_like.csv")
+expect_in("${ERR}" "rotation is off orthonormal")
+string(REPLACE "${first_rotation}" "\"cam_R_m2c\": [-1, 0, 0, 0, 1, 0, 0, 0, 1]" mirrored_text "${gt_text}")
+file(WRITE "${lmo_gt}" "${mirrored_text}")
+run(FALSE info "${WORK}/lmo_like")
+expect_in("${ERR}" "image 0, object 0: 'cam_R_m2c' is a reflection")
 # An interrupted bop run resumes without losing or doubling rows: one image, then (after a row of
 # an image not yet vouched for was left behind, as an interruption between the two writes leaves
 # it) two more, then the rest; the same rows as the run in one go, times aside.
