@@ -341,13 +341,9 @@ BopScores score_bop(const BopDataset& ds, const std::map<int, TriangleMesh>& mes
     ObjectData& data = objects[id];
     data.mesh = &mesh->second;
     data.closed_winding = closed_mesh_winding(mesh->second);
-    const auto info = ds.models.find(id);
-    if (info != ds.models.end()) {
-      data.diameter_m = info->second.diameter_m;
-      data.symmetries = symmetry_transforms(info->second, o.symmetry_step);
-    } else {
-      data.symmetries = {Transform::Identity()};
-    }
+    ObjectScale scale = object_scale(ds.models, id, o.symmetry_step);
+    data.diameter_m = scale.diameter_m;
+    data.symmetries = std::move(scale.symmetries);
     if (!(data.diameter_m > 0)) data.diameter_m = mesh_diameter(mesh->second);
     if (!(data.diameter_m > 0)) throw Error(fmt::format("eval: object {} has no size", id));
   }

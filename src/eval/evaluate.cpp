@@ -22,6 +22,12 @@ std::vector<Transform> symmetry_transforms(const ModelInfo& info, double step) {
                              static_cast<int>(std::ceil(M_PI / step)));
 }
 
+ObjectScale object_scale(const ModelsInfo& models, int obj_id, double symmetry_step) {
+  const auto info = models.find(obj_id);
+  if (info == models.end()) return {0.0, {Transform::Identity()}};
+  return {info->second.diameter_m, symmetry_transforms(info->second, symmetry_step)};
+}
+
 namespace {
 
 struct ObjectData {
@@ -138,13 +144,9 @@ EvalReport evaluate(const BopDataset& ds, const std::map<int, std::vector<Eigen:
     if (points == model_points.end() || points->second.empty()) throw Error(fmt::format("eval: no model for object {}", id));
     ObjectData& data = objects[id];
     data.points = thin(points->second, o.max_model_points);
-    const auto info = ds.models.find(id);
-    if (info != ds.models.end()) {
-      data.diameter_m = info->second.diameter_m;
-      data.symmetries = symmetry_transforms(info->second, o.symmetry_step);
-    } else {
-      data.symmetries = {Transform::Identity()};
-    }
+    ObjectScale scale = object_scale(ds.models, id, o.symmetry_step);
+    data.diameter_m = scale.diameter_m;
+    data.symmetries = std::move(scale.symmetries);
     if (!(data.diameter_m > 0)) data.diameter_m = diameter_of(data.points);
     if (!(data.diameter_m > 0)) throw Error(fmt::format("eval: object {} has no size", id));
   }

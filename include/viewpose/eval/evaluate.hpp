@@ -46,6 +46,14 @@ struct EvalOptions {
 /// steps as the BOP toolkit discretizes them.
 std::vector<Transform> symmetry_transforms(const ModelInfo& info, double step = 0.01);
 
+/// What scoring needs of an object from models_info.json: its diameter (0 when the file does not
+/// list the object) and its symmetry transforms (the identity alone when it does not).
+struct ObjectScale {
+  double diameter_m = 0;
+  std::vector<Transform> symmetries;
+};
+ObjectScale object_scale(const ModelsInfo& models, int obj_id, double symmetry_step = 0.01);
+
 /// One row of the report: an object, a scene, or everything.
 struct Score {
   int targets = 0;                   ///< ground truths to find
