@@ -154,14 +154,22 @@ def margins(ev, details):
     return out
 
 
-def speed_runs(viewpose, work, log):
-    """viewpose bench: 100 seed frames on every core and on one, and against a thousand objects."""
+def speed_runs(viewpose, work, log, repeats=3):
+    """viewpose bench: 100 seed frames on every core and on one, and against a thousand objects.
+
+    The run on every core is made `repeats` times and the one with the middle median is kept: on
+    these shared machines one run's median moves by 10-25 % with what the neighbours do."""
     out = {}
     for name, frames, extra in [("all cores", 100, []), ("one thread", 100, ["--threads", 1]),
                                 ("1000 objects", 30, ["--objects", 1000]), ("1000 objects, one frame", 1, ["--objects", 1000])]:
-        path = work / f"bench_{name.replace(' ', '_').replace(',', '')}.json"
-        run(viewpose, "bench", "--frames", frames, *extra, "--json", path, log=log)
-        out[name] = json.loads(path.read_text())
+        runs = []
+        for k in range(repeats if name == "all cores" else 1):
+            path = work / f"bench_{name.replace(' ', '_').replace(',', '')}_{k}.json"
+            run(viewpose, "bench", "--frames", frames, *extra, "--json", path, log=log)
+            runs.append(json.loads(path.read_text()))
+        runs.sort(key=lambda r: r["stages_ms"]["total"]["median"])
+        out[name] = runs[len(runs) // 2]
+        out[name]["repeat_medians_ms"] = [r["stages_ms"]["total"]["median"] for r in runs]
     pcl = ROOT / "docs" / "results" / "pcl_side_by_side.json"
     out["pcl"] = json.loads(pcl.read_text()) if pcl.exists() else None
     return out
@@ -181,6 +189,9 @@ def write_speed(w, speed):
         o = one["stages_ms"][name]
         w(f"| {name} | {st[name]['median']:.2f} | {st[name]['p90']:.2f} | {st[name]['p95']:.2f} | {st[name]['max']:.2f} | "
           f"{o['median']:.2f} | {o['p95']:.2f} |")
+    if len(a.get("repeat_medians_ms", [])) > 1:
+        w(f"The run on every core was made {len(a['repeat_medians_ms'])} times (medians "
+          f"{', '.join(f'{x:.2f}' for x in a['repeat_medians_ms'])} ms); the table shows the middle one.\n")
     w(f"\n{a['fps']:.0f} frames per second on {a['threads']} threads ({one['fps']:.0f} on one); {a['hypotheses_median']:.0f} hypotheses "
       f"per frame (median), ICP and verification {a['icp_verify_per_hypothesis_ms']:.2f} ms of wall time per hypothesis. "
       f"Making the recognizer (filling the ICP grid): {a['prepare_ms']:.0f} ms. Peak memory {a['peak_rss_mib']:.0f} MiB.\n")
