@@ -83,7 +83,16 @@ nlohmann::json recognition_json(const Recognition& r, bool with_times) {
                                       {"cluster_explained", d.verification.cluster_explained},
                                       {"model_support", d.verification.model_support},
                                       {"visible_fraction", d.verification.visible_fraction},
-                                      {"unmeasured_fraction", d.verification.unmeasured_fraction}}}});
+                                      {"unmeasured_fraction", d.verification.unmeasured_fraction},
+                                      {"mean_depth_m", d.verification.mean_depth_m},
+                                      {"outline_continuation", d.verification.outline_continuation},
+                                      {"outline", {{"continued", d.verification.outline_continued},
+                                                   {"stepped", d.verification.outline_stepped},
+                                                   {"in_front", d.verification.outline_in_front},
+                                                   {"unknown", d.verification.outline_unknown}}},
+                                      {"model_rms_m", d.verification.model_rms_m},
+                                      {"plane_rms_m", d.verification.plane_rms_m},
+                                      {"model_relief_m", d.verification.model_relief_m}}}});
   }
   nlohmann::json j = {{"detections", dets}, {"cut_short", r.cut_short}, {"clusters", r.clusters},
                       {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses}};

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 #include "viewpose/core/point_cloud.hpp"
 #include "viewpose/render/rasterizer.hpp"
 #include "viewpose/render/sensor_model.hpp"
@@ -19,8 +21,31 @@ int nearest_pixel(double x) { return x >= 0 ? static_cast<int>(x + 0.5) : -stati
 }  // namespace
 
 float depth_tolerance(float z_m, const VerifyOptions& o) {
-  return o.base_tolerance_m + o.noise_factor * axial_noise_sigma_frontal(z_m);
+  return std::min(o.max_tolerance_m, o.base_tolerance_m + o.noise_factor * axial_noise_sigma_frontal(z_m));
 }
+
+namespace {
+
+// Sums for a least-squares plane through points: RMS distance from the best plane at the end.
+struct PlaneSums {
+  double n = 0;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  void add(const Eigen::Vector3d& p) {
+    n += 1;
+    sum += p;
+    outer += p * p.transpose();
+  }
+  double rms_distance() const {
+    if (n < 3) return 0;
+    const Eigen::Vector3d mean = sum / n;
+    const Eigen::Matrix3d cov = outer / n - mean * mean.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov, Eigen::EigenvaluesOnly);
+    return std::sqrt(std::max(0.0, eig.eigenvalues()(0)));
+  }
+};
+
+}  // namespace
 
 Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_object, const DepthImage& observed,
                          const CameraIntrinsics& K, std::span<const Eigen::Vector3f> cluster_points,
@@ -100,6 +125,21 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
       for (int x = std::max(cu0, cu - half); x <= std::min(cu0 + cw - 1, cu + half); ++x) cluster_at(x, y) = 1;
   }
   std::size_t supported = 0;
+  double depth_sum = 0;
+  std::size_t depth_count = 0;
+  PlaneSums observed_plane, model_plane;
+  double model_sq = 0;
+  // The outline is looked at this many camera pixels beyond the edge: past the sensor's lateral
+  // jitter (about a pixel) and the edge margin.
+  const int reach_out = std::max(m + 3, ((step == 1 ? m : std::max(1, (m + step - 1) / step)) + 1) * step + 1);
+  const auto outline_look = [&](int x, int y, float z_edge, float tol) {
+    if (x < 0 || y < 0 || x >= W || y >= H) return;
+    const float zo = observed.at(x, y);
+    if (!std::isfinite(zo)) ++v.outline_unknown;
+    else if (zo > z_edge + tol) ++v.outline_stepped;
+    else if (zo < z_edge - tol) ++v.outline_in_front;
+    else ++v.outline_continued;
+  };
   // A sample within ms of the window's edge has a neighbour ms away outside the window, where the
   // model is not drawn: it cannot be interior. So only the inner window is judged, and its
   // neighbours are read without bounds checks. (The edge test's reach stays at least m camera pixels.)
@@ -115,6 +155,14 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
       const float zm = row[xs];
       if (!std::isfinite(zm)) continue;
       const float tol = depth_tolerance(zm, o);
+      {
+        // An outline sample: a neighbour ms away has no model. Look beyond it, outward.
+        const int x = u0 + xs * step;
+        if (!std::isfinite(row[xs + ms])) outline_look(x + reach_out, y, zm, tol);
+        if (!std::isfinite(row[xs - ms])) outline_look(x - reach_out, y, zm, tol);
+        if (!std::isfinite(down[xs])) outline_look(x, y + reach_out, zm, tol);
+        if (!std::isfinite(up[xs])) outline_look(x, y - reach_out, zm, tol);
+      }
       // Only pixels well inside the model's outline and away from its own depth steps are judged:
       // edges are where the sensor's lateral noise lives. (A NaN neighbour fails the test.)
       if (!(std::abs(row[xs + ms] - zm) <= tol && std::abs(row[xs - ms] - zm) <= tol && std::abs(up[xs] - zm) <= tol &&
@@ -138,11 +186,23 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
       else {
         ++v.inliers;
         supported += cluster_here;
+        const double rx = (x - K.cx) / K.fx, ry = (y - K.cy) / K.fy;
+        observed_plane.add(Eigen::Vector3d(rx * zo, ry * zo, zo));
+        model_plane.add(Eigen::Vector3d(rx * zm, ry * zm, zm));
+        model_sq += static_cast<double>(zo - zm) * static_cast<double>(zo - zm);
       }
+      depth_sum += zm;
+      ++depth_count;
     }
   }
   // Counts in the camera's pixels: each sample stands for s x s of them.
   const std::size_t area = static_cast<std::size_t>(step) * static_cast<std::size_t>(step);
+  v.mean_depth_m = depth_count ? depth_sum / static_cast<double>(depth_count) : 0.0;
+  v.model_rms_m = observed_plane.n > 0 ? std::sqrt(model_sq / observed_plane.n) : 0.0;
+  v.plane_rms_m = observed_plane.rms_distance();
+  v.model_relief_m = model_plane.rms_distance();
+  const std::size_t outline_judged = v.outline_continued + v.outline_stepped;
+  v.outline_continuation = outline_judged ? static_cast<double>(v.outline_continued) / static_cast<double>(outline_judged) : 0.0;
   v.inliers *= area, v.conflicts *= area, v.occluded *= area, v.unknown *= area, v.hidden_by_cluster *= area;
   supported *= area;
   const std::size_t judged = v.inliers + v.conflicts + v.hidden_by_cluster;
@@ -183,7 +243,7 @@ bool passes(const Verification& v, const VerifyOptions& o) {
   return v.inliers >= o.min_inliers && v.inlier_fraction >= o.min_inlier_fraction &&
          v.conflict_fraction <= o.max_conflict_fraction && v.cluster_explained >= o.min_cluster_explained &&
          v.model_support >= o.min_model_support && v.visible_fraction >= o.min_visible_fraction &&
-         v.unmeasured_fraction <= o.max_unmeasured_fraction;
+         v.unmeasured_fraction <= o.max_unmeasured_fraction && v.mean_depth_m <= o.max_depth_m;
 }
 
 }  // namespace viewpose

@@ -78,6 +78,13 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   part_verify.max_unmeasured_fraction = std::min(part_verify.max_unmeasured_fraction, options_.part_max_unmeasured_fraction);
   part_verify.min_inlier_fraction = std::max(part_verify.min_inlier_fraction, options_.part_min_inlier_fraction);
   part_verify.min_cluster_explained = std::max(part_verify.min_cluster_explained, options_.part_min_cluster_explained);
+  // Verification gives no verdict past its range (VerifyOptions::max_depth_m): a region that lies
+  // beyond it is not tried at all, rather than tried against every view to no end.
+  if (points.size() > 0) {
+    double z = 0;
+    for (const auto& p : points.points) z += p.z();
+    if (z / static_cast<double>(points.size()) > options_.verify.max_depth_m) return;
+  }
   const double size = bounding_box(points.points).diagonal();
   if (size <= options_.max_cluster_size_factor * largest_diameter_m_) {
     if (std::optional<Detection> det = recognize_cluster(points, frame, depth > 0 ? part_verify : options_.verify, out)) {

@@ -7,6 +7,7 @@
 #include "viewpose/core/depth_image.hpp"
 #include "viewpose/pose/verify.hpp"
 #include "viewpose/render/rasterizer.hpp"
+#include "viewpose/render/sensor_model.hpp"
 #include "viewpose/render/shapes.hpp"
 
 namespace viewpose {
@@ -94,6 +95,85 @@ TEST(Verify, JudgingEveryFewPixelsEstimatesTheSameFractionsAndCounts) {
   EXPECT_GE(coarse.pixel_step, 3);
   EXPECT_NEAR(coarse.cluster_explained, all.cluster_explained, 0.1);
   EXPECT_FALSE(coarse.accepted);
+}
+
+// A box's front face flush with a wall: what a box seen face-on and a patch cut out of the wall look
+// like inside the outline. The wall is the frame; the cluster, the wall's points the face covers.
+struct FaceOnWall {
+  CameraIntrinsics K = CameraIntrinsics::kinect_v1();
+  TriangleMesh box = make_box_mesh({0.20f, 0.15f, 0.10f});
+  TriangleMesh wall = test::square(6.0f);
+  double wall_z;
+  Transform T_camera_box;  // the face at z = -0.05 in the box's frame lies on the wall
+  DepthImage depth;
+  std::vector<Eigen::Vector3f> cluster;
+  FaceOnWall(double z, const SensorModel& sensor) : wall_z(z) {
+    T_camera_box = make_transform(Eigen::Matrix3d::Identity(), {0.02, -0.01, z + 0.05});
+    const MeshInstance w{&wall, make_transform(Eigen::Matrix3d::Identity(), {0, 0, z})};
+    RenderOptions with_normals;
+    with_normals.normals = true;
+    depth = simulate_sensor(render(std::span(&w, 1), K, with_normals), K, sensor, 5);
+    const MeshInstance b{&box, T_camera_box};
+    const RenderedFrame face = render(std::span(&b, 1), K);
+    const PointCloud cloud = depth_to_cloud(depth, K);
+    for (std::size_t i = 0; i < cloud.points.size(); ++i)
+      if (std::isfinite(face.depth.depth_m[i]) && cloud.points[i].allFinite()) cluster.push_back(cloud.points[i]);
+  }
+  Verification check(const VerifyOptions& o = {}) const {
+    const VerifyModel model{&box, {}, 0.003f, closed_mesh_winding(box)};
+    return verify_pose(model, T_camera_box, depth, K, cluster, o);
+  }
+};
+
+// Where the model ends, the scene must step away (or be hidden, or missing): a box face seen alone on
+// a wall carries on flat all round its outline; the jug before a wall steps away all round.
+TEST(Verify, TheOutlineSaysWhetherTheSceneStepsAwayOrCarriesOn) {
+  const Verification jug = Scene().check(Scene().T_camera_jug);
+  EXPECT_GT(jug.outline_stepped, 100u);
+  EXPECT_LT(jug.outline_continuation, 0.02);
+  const Verification face = FaceOnWall(1.2, SensorModel::ideal()).check();
+  EXPECT_GT(face.inlier_fraction, 0.99);  // inside the outline the face is a perfect fit...
+  EXPECT_GT(face.outline_continued, 100u);
+  EXPECT_GT(face.outline_continuation, 0.98);  // ...and all round it the wall carries on
+  EXPECT_EQ(face.outline_stepped, 0u);
+}
+
+// Model against plane: the jug's visible surface has relief, and where the jug is truly there the
+// observed points have it too; a flat face on a flat wall has none either way.
+TEST(Verify, ModelAndPlaneResidualsTellACurvedSurfaceFromAFlatOne) {
+  const Scene s;
+  const Verification jug = s.check(s.T_camera_jug);
+  EXPECT_GT(jug.model_relief_m, 0.008);
+  EXPECT_NEAR(jug.plane_rms_m, jug.model_relief_m, 0.001);  // noise-free: the observed surface is the model's
+  EXPECT_LT(jug.model_rms_m, 0.0005);
+  const Verification face = FaceOnWall(1.2, SensorModel::ideal()).check();
+  EXPECT_LT(face.model_relief_m, 1e-4);
+  EXPECT_LT(face.plane_rms_m, 1e-4);
+}
+
+// Past 3.5 m a Kinect's depth is centimetres of noise in 4 cm steps: the tolerance that grew with it
+// let a box face pass on a wall at 3.8 m (as it does with the cap and the range lifted); neither the
+// tolerance's cap nor the range limit lets it now. Nearer, at 1.2 m, the face on the wall is judged
+// as it always was (and refused only by its outline, which verification reports).
+TEST(Verify, AFarWallGetsNoVerdictAndTheToleranceHasACap) {
+  const FaceOnWall far(3.8, SensorModel::kinect_v1());
+  ASSERT_GT(far.cluster.size(), 500u);
+  VerifyOptions uncapped;
+  uncapped.max_tolerance_m = 1.0f;
+  uncapped.max_depth_m = 100;
+  const Verification loose = far.check(uncapped);
+  EXPECT_TRUE(loose.accepted);  // what the grown tolerance allowed
+  const Verification v = far.check();
+  EXPECT_FALSE(v.accepted);
+  EXPECT_NEAR(v.mean_depth_m, 3.8, 0.01);  // the face, on the wall
+  EXPECT_FLOAT_EQ(depth_tolerance(3.8f, VerifyOptions{}), 0.02f);
+  EXPECT_LT(depth_tolerance(1.0f, VerifyOptions{}), 0.011f);  // nearer, the noise's tolerance as before
+  // The cap alone: with the range lifted, the centimetres of noise fall outside 2 cm.
+  VerifyOptions range_lifted;
+  range_lifted.max_depth_m = 100;
+  const Verification capped = far.check(range_lifted);
+  EXPECT_LT(capped.inlier_fraction, loose.inlier_fraction);
+  EXPECT_LT(capped.inlier_fraction, 0.85);
 }
 
 }  // namespace

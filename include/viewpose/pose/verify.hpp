@@ -23,6 +23,13 @@ namespace viewpose {
 struct VerifyOptions {
   float base_tolerance_m = 0.005f;  ///< tolerance = base + noise_factor * sensor sigma at that depth
   float noise_factor = 2.5f;
+  /// ... but never more than this: past it the sensor's noise is larger than the shapes it is to
+  /// tell apart (at 3.5 m a Kinect's 2.5 sigma is 5 cm, the depth of a jug), and a tolerance that
+  /// kept growing let a flat patch of a far wall pass for any object.
+  float max_tolerance_m = 0.02f;
+  /// Poses whose judged surface lies farther than this on average get no verdict: a Kinect or
+  /// Xtion's depth there is noise of centimetres in steps of 4 cm (docs/SENSOR_MODEL.md).
+  double max_depth_m = 3.5;
   int edge_margin_px = 2;           ///< model pixels this close to its outline or a depth step are not judged
   double min_inlier_fraction = 0.7;    ///< of the model's judged pixels that are not occluded
   /// Where the camera sees through the model (free space) a correct pose has almost nothing: the
@@ -58,6 +65,7 @@ struct VerifyOptions {
 
 struct Verification {
   bool accepted = false;
+  double mean_depth_m = 0;  ///< mean model depth over the judged pixels
   double score = 0;  ///< inlier fraction x cluster explained, in [0, 1]
   double inlier_fraction = 0;
   double conflict_fraction = 0;
@@ -68,6 +76,17 @@ struct Verification {
   std::size_t inliers = 0, conflicts = 0, occluded = 0, unknown = 0;
   std::size_t hidden_by_cluster = 0;  ///< model pixels behind the cluster's own surface (conflicts too)
   int pixel_step = 1;  ///< s: the model was judged on every s-th pixel (counts are scaled by s^2)
+  /// The outline: just outside the model's silhouette, the scene should step away (farther than
+  /// the model's edge by more than the tolerance), be hidden by something in front, or be missing;
+  /// where it carries on at the edge's depth, the model is a patch cut out of a larger surface.
+  /// Counted in outline samples, each looked at a few pixels beyond the edge, outward.
+  std::size_t outline_continued = 0, outline_stepped = 0, outline_in_front = 0, outline_unknown = 0;
+  double outline_continuation = 0;  ///< continued / (continued + stepped)
+  /// Model against plane over the inlier pixels: RMS of the observed depth about the model, and
+  /// RMS distance of the observed points from their own best plane; and the model's own relief (its
+  /// drawn points' RMS distance from their best plane). A curved model on a flat patch explains it
+  /// no better than the plane does.
+  double model_rms_m = 0, plane_rms_m = 0, model_relief_m = 0;
 };
 
 /// Whether `v` meets every bound of `options` (what verify_pose sets `accepted` from).
