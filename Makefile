@@ -9,6 +9,7 @@
 #   make bench          micro-benchmarks of each stage, then the pipeline over 100 frames
 #   make bench-pcl      install PCL, and time the thesis's PCL pipeline beside ours, stage by stage
 #   make results        real frames, simulated rooms, the thesis's experiment; writes docs/RESULTS.md
+#   make confidence     make the simulated data the confidence model is fit on, and fit it (docs/CONFIDENCE.md)
 #   make pcl-fixtures   install PCL, and regenerate tests/fixtures/pcl from PCL's own code
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 FUZZ_SECONDS ?= 60
@@ -18,7 +19,7 @@ BUILD := build
 ARCHER = $(firstword $(wildcard /usr/lib/llvm-*/lib/libarcher.so))
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-sanitize test-thread fuzz check bench bench-pcl results pcl-fixtures clean
+.PHONY: all deps build demo test test-sanitize test-thread fuzz check bench bench-pcl results confidence pcl-fixtures clean
 
 all: build
 
@@ -72,6 +73,10 @@ bench-pcl: deps
 results: build
 	@scripts/install-deps.sh results
 	@/usr/bin/python3 scripts/make-results.py
+
+confidence: build
+	@scripts/install-deps.sh results
+	@scripts/confidence-data.sh
 
 pcl-fixtures: build
 	@scripts/install-deps.sh pcl

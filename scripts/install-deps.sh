@@ -11,7 +11,7 @@ build_pkgs=(build-essential cmake pkg-config
             libfreenect-dev libopenni2-dev)  # camera back-ends of viewpose live (libfreenect ships fakenect)
 fuzz_pkgs=(clang libclang-rt-dev libomp-dev)  # libFuzzer, sanitizer runtimes and OpenMP for clang
 pcl_pkgs=(libpcl-dev)               # only for the optional side-by-side benchmark
-results_pkgs=(python3 python3-matplotlib)  # make results: the report and its plots
+results_pkgs=(python3 python3-matplotlib python3-numpy)  # make results and fit-confidence: the report, its plots, the fit
 
 wanted=()
 for group in "${@:-build}"; do

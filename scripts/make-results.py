@@ -150,7 +150,7 @@ def margins(ev, details):
     out = {}
     for det, est in zip(detections, ev["estimates"]):
         if est["correct_add_s"]:
-            out.setdefault(est["scene_id"], []).append(det["score"] - det["runner_up_score"])
+            out.setdefault(est["scene_id"], []).append(det["verification"]["fit_score"] - det["runner_up_score"])
     return out
 
 

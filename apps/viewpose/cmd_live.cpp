@@ -51,7 +51,7 @@ void add_live_command(CLI::App& app, int& exit_code) {
     CameraFlags camera;
     bool json_lines = false, no_split = false;
     int frames = 0;
-    double seconds = 0, stall_seconds = 5, deadline_ms = 0;
+    double seconds = 0, stall_seconds = 5, deadline_ms = 0, min_score = -1;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("live", "Recognize objects in a depth camera's stream, frame after frame");
@@ -73,6 +73,10 @@ void add_live_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--deadline-ms", o->deadline_ms,
                   "Per frame: stop trying poses after this long and report what is verified, marked cut short (0: no limit)")
       ->check(CLI::Range(0.0, 1e7));
+  cmd->add_option("--min-score", o->min_score,
+                  "Report only poses whose score (the estimated probability that the pose is right) reaches this "
+                  "(default: the threshold fit for 98 % precision, docs/CONFIDENCE.md)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->callback([o, &exit_code] {
     // From the start: a Ctrl-C while the database loads or the camera opens also ends cleanly.
     g_stop = false;
@@ -88,6 +92,7 @@ void add_live_command(CLI::App& app, int& exit_code) {
     RecognizerOptions options;
     options.split_touching = !o->no_split;
     options.deadline_ms = o->deadline_ms;
+    if (o->min_score >= 0) options.min_confidence = o->min_score;
     const Recognizer recognizer(db, options);
     const std::unique_ptr<DepthSource> source = open_depth_source(o->source);
     CameraIntrinsics K = source->intrinsics();

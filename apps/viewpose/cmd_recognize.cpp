@@ -4,6 +4,7 @@
 #include <map>
 #include <memory>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -21,6 +22,8 @@
 #include "viewpose/io/file.hpp"
 #include "viewpose/io/image_png.hpp"
 #include "viewpose/io/ply.hpp"
+#include "viewpose/eval/metrics.hpp"
+#include "viewpose/pose/confidence.hpp"
 #include "viewpose/recognize/recognizer.hpp"
 #include "viewpose/visualize/overlay.hpp"
 
@@ -34,6 +37,7 @@ struct RecognizeFlags {
   bool no_split = false;
   std::size_t matches = 20;
   double deadline_ms = 0;
+  double min_score = -1;  // < 0: the recognizer's default
   bool no_times = false;
   void add_to(CLI::App& cmd) {
     cmd.add_option("--db", db, "View database (viewpose db build)")->required()->check(CLI::ExistingFile);
@@ -44,6 +48,11 @@ struct RecognizeFlags {
     cmd.add_option("--deadline-ms", deadline_ms,
                    "Stop trying poses after this long per frame and report what is verified, marked cut short (0: no limit)")
         ->check(CLI::Range(0.0, 1e7));
+    cmd.add_option("--min-score", min_score,
+                   "Report only poses whose score (the estimated probability that the pose is right) reaches this; "
+                   "lower finds more and is wrong more often (default: the threshold that kept 98 % of the poses "
+                   "right on the simulated rooms the confidence was fit on, docs/CONFIDENCE.md)")
+        ->check(CLI::Range(0.0, 1.0));
     cmd.add_flag("--no-times", no_times,
                  "Write no run times into the output files (a BOP CSV's time is -1, the JSON has none), so that they "
                  "depend on the inputs alone, byte for byte, whatever the thread count");
@@ -54,6 +63,7 @@ struct RecognizeFlags {
     o.split_touching = !no_split;
     o.matches = matches;
     o.deadline_ms = deadline_ms;
+    if (min_score >= 0) o.min_confidence = min_score;
     return o;
   }
 };
@@ -78,7 +88,8 @@ nlohmann::json recognition_json(const Recognition& r, bool with_times) {
                     {"icp_rmse_m", d.icp_rmse_m}, {"match_rank", d.match_rank}, {"roll_deg", d.roll_deg},
                     {"cluster_points", d.cluster_points}, {"from_split_cluster", d.from_split_cluster},
                     {"runner_up_score", d.runner_up_score},
-                    {"verification", {{"inlier_fraction", d.verification.inlier_fraction},
+                    {"verification", {{"fit_score", d.verification.score},
+                                      {"inlier_fraction", d.verification.inlier_fraction},
                                       {"conflict_fraction", d.verification.conflict_fraction},
                                       {"cluster_explained", d.verification.cluster_explained},
                                       {"model_support", d.verification.model_support},
@@ -113,7 +124,7 @@ void print_recognition(const Recognition& r) {
     // The margin: how far the pose stood above its best half-turned rival (none passing: the score).
     fmt::print("{} (id {}): position ({:.3f}, {:.3f}, {:.3f}) m, yaw/pitch/roll ({:.1f}, {:.1f}, {:.1f}) deg, score {:.2f}, "
                "margin {:.2f}, match rank {}\n", d.object_name, d.object_id, t.x(), t.y(), t.z(), ypr.x(), ypr.y(), ypr.z(),
-               d.score, d.score - d.runner_up_score, d.match_rank);
+               d.score, d.verification.score - d.runner_up_score, d.match_rank);
   }
   if (r.cut_short) fmt::print("cut short by the deadline: views, parts or checks were left untried\n");
   const StageTimes& s = r.times;
@@ -226,12 +237,39 @@ void keep_targets(Recognition& r, const std::map<int, int>& inst_count) {
   });
 }
 
+// One JSON line per pose verification passed, labelled by its ADD-S to the nearest ground truth of
+// its object in the image (a share of the object's diameter; null when none is there).
+std::string hypotheses_json(const std::vector<VerifiedHypothesis>& heard, const ViewDatabase& db, const BopImage& im) {
+  std::string lines;
+  for (const VerifiedHypothesis& h : heard) {
+    const DatabaseObject& object = db.objects[h.object_index];
+    std::optional<double> add_s;
+    double visib = -1;
+    for (std::size_t g = 0; g < im.gt.size(); ++g) {
+      if (im.gt[g].obj_id != object.id) continue;
+      const double e = add_s_error(h.T_camera_object, im.gt[g].T_camera_object, object.model_points) / object.diameter_m;
+      if (!add_s || e < *add_s) {
+        add_s = e;
+        visib = g < im.gt_info.size() ? im.gt_info[g].visib_fract : -1;
+      }
+    }
+    nlohmann::ordered_json features = nlohmann::ordered_json::object();  // in the order of confidence_features()
+    const ConfidenceFeatures f = confidence_features(h.verification);
+    for (std::size_t k = 0; k < f.size(); ++k) features[std::string(confidence_feature_names()[k])] = f[k];
+    nlohmann::ordered_json line = {{"scene_id", im.scene_id}, {"im_id", im.im_id}, {"obj_id", object.id},
+                           {"confidence", h.confidence}, {"fit_score", h.verification.score}, {"features", features},
+                           {"add_s_rel", add_s ? nlohmann::ordered_json(*add_s) : nlohmann::ordered_json(nullptr)}, {"gt_visib", visib}};
+    lines += line.dump() + "\n";
+  }
+  return lines;
+}
+
 }  // namespace
 
 void add_bop_command(CLI::App& app, int& exit_code) {
   struct Options {
     RecognizeFlags flags;
-    std::string dataset, split = "test", out, models_dir = "models", details, targets;
+    std::string dataset, split = "test", out, models_dir = "models", details, targets, hypotheses;
     bool resume = false;
     std::size_t images = 0;
   };
@@ -250,6 +288,10 @@ void add_bop_command(CLI::App& app, int& exit_code) {
                   "each only the objects it names, at most its instance count of each, the best first (the BOP19 task). "
                   "Without it every image, any object, any number")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--hypotheses", o->hypotheses,
+                  "For fitting the confidence model (scripts/fit-confidence.py): write one JSON line for every pose that "
+                  "passed verification's bounds, with its evidence, its confidence and its ADD-S to the nearest ground "
+                  "truth of its object (as a share of the diameter). Use with --keep-best to hear of every one");
   cmd->add_flag("--resume", o->resume,
                 "Carry on an interrupted run: keep the images OUT.progress lists as done, do the rest");
   cmd->add_option("--images", o->images, "Do at most this many images in this run (then --resume does more)")
@@ -272,7 +314,15 @@ void add_bop_command(CLI::App& app, int& exit_code) {
       }
       std::erase_if(ds.images, [&](const BopImage& im) { return !wanted.count({im.scene_id, im.im_id}); });
     }
-    const Recognizer recognizer(db, o->flags.options());
+    // Every pose that passes verification's bounds, heard of while an image is recognized.
+    std::vector<VerifiedHypothesis> heard;
+    RecognizerOptions options = o->flags.options();
+    if (!o->hypotheses.empty()) {
+      if (o->resume) throw Error("bop: --hypotheses cannot be resumed; run it afresh");
+      options.on_verified = [&heard](const VerifiedHypothesis& h) { heard.push_back(h); };
+    }
+    std::string hypothesis_lines;
+    const Recognizer recognizer(db, options);
     const std::filesystem::path progress_path = o->out + ".progress";
     BopProgress progress{std::filesystem::absolute(o->dataset).lexically_normal().string(), ds.split,
                          std::filesystem::absolute(o->flags.db).lexically_normal().string(),
@@ -333,7 +383,9 @@ void add_bop_command(CLI::App& app, int& exit_code) {
         if (o->images > 0 && ran >= o->images) break;
         const auto start = std::chrono::steady_clock::now();
         const BopFrame bf = load_bop_frame(im);
+        heard.clear();
         Recognition r = recognizer.recognize(frame_from_depth(bf.depth, bf.K));
+        if (!o->hypotheses.empty()) hypothesis_lines += hypotheses_json(heard, db, im);
         if (const auto it = wanted.find({im.scene_id, im.im_id}); it != wanted.end()) keep_targets(r, it->second);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         total_ms += 1000 * seconds;
@@ -363,6 +415,7 @@ void add_bop_command(CLI::App& app, int& exit_code) {
       return std::pair(a.scene_id, a.im_id) < std::pair(b.scene_id, b.im_id);
     });
     checkpoint();
+    if (!o->hypotheses.empty()) write_file_atomic(o->hypotheses, hypothesis_lines);
     const bool complete = progress.done.size() >= ds.images.size();
     if (complete) std::filesystem::remove(progress_path);  // nothing left to resume
     fmt::print("{}: {} detections in {} images, {:.1f} ms per image{}\n", o->out, detections, ran,

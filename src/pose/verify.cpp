@@ -240,6 +240,8 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
 }
 
 bool passes(const Verification& v, const VerifyOptions& o) {
+  const bool flat = v.model_relief_m < o.flat_relief_sigmas * axial_noise_sigma_frontal(std::max(0.3, v.mean_depth_m));
+  if (flat && v.outline_continuation > o.max_flat_outline_continuation) return false;
   return v.inliers >= o.min_inliers && v.inlier_fraction >= o.min_inlier_fraction &&
          v.conflict_fraction <= o.max_conflict_fraction && v.cluster_explained >= o.min_cluster_explained &&
          v.model_support >= o.min_model_support && v.visible_fraction >= o.min_visible_fraction &&

@@ -9,6 +9,7 @@
 
 #include "viewpose/core/error.hpp"
 #include "viewpose/database/matching.hpp"
+#include "viewpose/pose/confidence.hpp"
 #include "viewpose/render/simplify.hpp"
 #include "viewpose/segment/convex_segments.hpp"
 #include "viewpose/segment/voxel_grid.hpp"
@@ -187,6 +188,13 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const T
     h.verify_ms = ms_since(t);
     h.verified = true;
   }
+  // Taken in order: the confidence of each pose verification passed, and what the caller hears of it.
+  for (Refined& h : out) {
+    if (!h.verified || !h.v.accepted) continue;
+    h.confidence = pose_confidence(h.v);
+    if (options_.on_verified) options_.on_verified({object, h.T_camera_object, h.v, h.confidence});
+    h.accepted = h.confidence >= options_.min_confidence;
+  }
   // The wall time, shared between the two stages as their summed times are.
   const double wall = ms_since(start);
   double icp = 0, verified = 0;
@@ -259,7 +267,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
       det.object_name = object.name;
       det.object_index = view.object;
       det.T_camera_object = h.T_camera_object;
-      det.score = h.v.score;
+      det.score = h.confidence;
       det.icp_fitness = h.icp.fitness;
       det.icp_rmse_m = h.icp.inlier_rmse;
       det.match_rank = static_cast<int>(rank);
@@ -281,7 +289,8 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
         }
         continue;
       }
-      if (found && found->score >= h.v.score) continue;
+      if (!h.accepted) continue;  // passed verification, but not confidently enough
+      if (found && found->verification.score >= h.v.score) continue;
       take(h, rolls[k]);
       if (!options_.keep_best) break;
     }
@@ -291,7 +300,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
                                                             view.object, icp_source, d.cloud.points, frame, verify, out.times);
       out.hypotheses += turned.size();
       for (const Refined& h : turned) {
-        if (h.verified && h.v.accepted && (!found || h.v.score > found->score)) take(h, rolls[nearest_miss_roll]);
+        if (h.accepted && (!found || h.v.score > found->verification.score)) take(h, rolls[nearest_miss_roll]);
       }
     }
     return found;
@@ -302,7 +311,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
   for (; rank < matches.size() && !(best && !options_.keep_best); ++rank) {
     if (out_of_time(out)) break;
     std::optional<Detection> det = try_view(rank);
-    if (det && (!best || det->score > best->score)) best = std::move(det);
+    if (det && (!best || det->verification.score > best->verification.score)) best = std::move(det);
   }
   if (best && !options_.keep_best && options_.challenger_views > 0) {
     // Another object may explain the cluster better (two boxes of similar size): the other objects
@@ -313,7 +322,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
       const std::uint32_t object = db_.views[matches[rank].view].object;
       if (object == best->object_index || tried[object]++ >= options_.challenger_views) continue;
       std::optional<Detection> det = try_view(rank);
-      if (det && det->score > best->score) best = std::move(det);
+      if (det && det->verification.score > best->verification.score) best = std::move(det);
     }
   }
   if (best && options_.try_half_turns && !out_of_time(out)) {
@@ -325,11 +334,11 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
     Detection chosen = *best;
     double runner_up = 0;
     for (const Refined& h : turned) {
-      if (!h.v.accepted) continue;
-      if (h.v.score > chosen.score) {
-        runner_up = std::max(runner_up, chosen.score);
+      if (!h.accepted) continue;
+      if (h.v.score > chosen.verification.score) {
+        runner_up = std::max(runner_up, chosen.verification.score);
         chosen.T_camera_object = h.T_camera_object;
-        chosen.score = h.v.score;
+        chosen.score = h.confidence;
         chosen.icp_fitness = h.icp.fitness;
         chosen.icp_rmse_m = h.icp.inlier_rmse;
         chosen.verification = h.v;

@@ -281,7 +281,6 @@ SimDataset make_room_scenes(const std::vector<ObjectModel>& objects, const Camer
     scene.scene_id = r + 1;
     ds.scenes.push_back(std::move(scene));
   }
-  constexpr double kDeg = std::numbers::pi / 180.0;
   for (int im = 0; im < o.images; ++im) {
     const std::size_t r = static_cast<std::size_t>(im) % rooms.size();
     const Room& room = rooms[r];

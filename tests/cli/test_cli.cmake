@@ -108,6 +108,10 @@ run(TRUE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000
 expect_in("${OUT}" "cut short by the deadline")
 file(READ "${WORK}/late.json" json)
 expect_in("${json}" "\"cut_short\": true")
+# The score is a probability: nothing is certain, so --min-score 1 reports nothing; out of 0..1 is a usage error.
+run(TRUE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json" --min-score 1)
+expect_in("${OUT}" "no known object found")
+run(FALSE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json" --min-score 1.5)
 run(FALSE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png")
 expect_in("${ERR}" "needs its camera")
 run(TRUE bop --db "${WORK}/jug.vpdb" --dataset "${WORK}/sim" -o "${WORK}/results.csv")

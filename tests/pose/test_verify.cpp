@@ -107,12 +107,13 @@ struct FaceOnWall {
   Transform T_camera_box;  // the face at z = -0.05 in the box's frame lies on the wall
   DepthImage depth;
   std::vector<Eigen::Vector3f> cluster;
-  FaceOnWall(double z, const SensorModel& sensor) : wall_z(z) {
+  // `gap`: how far the wall stands behind the box's face (0: the face is a patch of the wall).
+  FaceOnWall(double z, const SensorModel& sensor, double gap = 0) : wall_z(z + gap) {
     T_camera_box = make_transform(Eigen::Matrix3d::Identity(), {0.02, -0.01, z + 0.05});
-    const MeshInstance w{&wall, make_transform(Eigen::Matrix3d::Identity(), {0, 0, z})};
+    const MeshInstance scene[] = {{&wall, make_transform(Eigen::Matrix3d::Identity(), {0, 0, z + gap})}, {&box, T_camera_box}};
     RenderOptions with_normals;
     with_normals.normals = true;
-    depth = simulate_sensor(render(std::span(&w, 1), K, with_normals), K, sensor, 5);
+    depth = simulate_sensor(render(std::span(scene, gap > 0 ? 2 : 1), K, with_normals), K, sensor, 5);
     const MeshInstance b{&box, T_camera_box};
     const RenderedFrame face = render(std::span(&b, 1), K);
     const PointCloud cloud = depth_to_cloud(depth, K);
@@ -138,6 +139,28 @@ TEST(Verify, TheOutlineSaysWhetherTheSceneStepsAwayOrCarriesOn) {
   EXPECT_EQ(face.outline_stepped, 0u);
 }
 
+// A flat face has nothing inside its outline to tell a box from a patch of wall: it is accepted only
+// where the scene steps away around it (the box standing 30 cm before the wall), not where the wall
+// carries on (the face flush with it). A curved model needs no such help: the jug's relief speaks.
+TEST(Verify, AFlatFaceIsAcceptedOnlyWhereItsOutlineStepsAway) {
+  const FaceOnWall flush(1.2, SensorModel::kinect_v1());
+  const Verification patch = flush.check();
+  EXPECT_GT(patch.inlier_fraction, 0.95);
+  EXPECT_GT(patch.cluster_explained, 0.95);
+  EXPECT_LT(patch.model_relief_m, 2 * axial_noise_sigma_frontal(1.2));
+  EXPECT_FALSE(patch.accepted);
+  VerifyOptions outline_ignored;
+  outline_ignored.max_flat_outline_continuation = 1.0;
+  EXPECT_TRUE(flush.check(outline_ignored).accepted);  // everything else says yes
+
+  const FaceOnWall standing(1.2, SensorModel::kinect_v1(), 0.3);
+  const Verification box = standing.check();
+  EXPECT_LT(box.outline_continuation, 0.1);
+  EXPECT_TRUE(box.accepted);
+  const Scene s;
+  EXPECT_TRUE(s.check(s.T_camera_jug).accepted);
+}
+
 // Model against plane: the jug's visible surface has relief, and where the jug is truly there the
 // observed points have it too; a flat face on a flat wall has none either way.
 TEST(Verify, ModelAndPlaneResidualsTellACurvedSurfaceFromAFlatOne) {
@@ -161,6 +184,7 @@ TEST(Verify, AFarWallGetsNoVerdictAndTheToleranceHasACap) {
   VerifyOptions uncapped;
   uncapped.max_tolerance_m = 1.0f;
   uncapped.max_depth_m = 100;
+  uncapped.max_flat_outline_continuation = 1.0;  // (the outline would refuse it too: see above)
   const Verification loose = far.check(uncapped);
   EXPECT_TRUE(loose.accepted);  // what the grown tolerance allowed
   const Verification v = far.check();

@@ -253,10 +253,14 @@ TEST(Recognize, TouchingObjectsAreBothFound) {
   const double beside = static_cast<double>(bounding_box(make_jug()).max.x()) + 0.033 - 0.003;
   const SimulatedFrame f = simulate_image(scene.ds, SimImage{{{0, scene.jug_pose}, {1, scene.can_at(beside)}}}, SensorModel::kinect_v1(), 9);
   const Frame frame = frame_from_depth(f.depth, K);
-  RecognizerOptions no_split;
+  // The can, small and half against the jug, is right with a confidence of 0.90, just below the
+  // default threshold fit for 98 % precision (0.917; docs/CONFIDENCE.md): what is tested here is
+  // the splitting, at a threshold that takes it.
+  RecognizerOptions no_split, split;
   no_split.split_touching = false;
+  no_split.min_confidence = split.min_confidence = 0.85;
   EXPECT_LE(Recognizer(db, no_split).recognize(frame).detections.size(), 1u);
-  const Recognition r = Recognizer(db).recognize(frame);
+  const Recognition r = Recognizer(db, split).recognize(frame);
   ASSERT_EQ(r.detections.size(), 2u);
   EXPECT_TRUE(r.detections[0].from_split_cluster || r.detections[1].from_split_cluster);
   expect_jug_and_can_found(r, f);

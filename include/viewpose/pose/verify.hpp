@@ -30,6 +30,13 @@ struct VerifyOptions {
   /// Poses whose judged surface lies farther than this on average get no verdict: a Kinect or
   /// Xtion's depth there is noise of centimetres in steps of 4 cm (docs/SENSOR_MODEL.md).
   double max_depth_m = 3.5;
+  /// A pose whose visible surface is flat (its relief below this many sensor sigmas at its depth)
+  /// has nothing inside its outline to tell it from a patch of any flat surface, a box face from a
+  /// wall: its outline must then say it. At most this share of that outline may carry on at the
+  /// model's depth (measured: box faces seen alone on real desk and simulated walls carry on over
+  /// 74-100 %, right poses of flat-looking objects under 60 %, docs/CONFIDENCE.md).
+  double flat_relief_sigmas = 2.0;
+  double max_flat_outline_continuation = 0.6;
   int edge_margin_px = 2;           ///< model pixels this close to its outline or a depth step are not judged
   double min_inlier_fraction = 0.7;    ///< of the model's judged pixels that are not occluded
   /// Where the camera sees through the model (free space) a correct pose has almost nothing: the

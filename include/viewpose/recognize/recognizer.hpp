@@ -4,6 +4,7 @@
 // and verify it; the first pose that passes is the detection (or, with keep_best, the best of all).
 // Objects that touch share a cluster: once one is found its points are explained away and the rest
 // recognized again, and a cluster nothing explains is split into convex parts (segment/convex_segments).
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -23,6 +24,14 @@
 
 namespace viewpose {
 
+/// A hypothesis that passed verification's bounds, as RecognizerOptions::on_verified hears of it.
+struct VerifiedHypothesis {
+  std::uint32_t object_index = 0;  ///< into ViewDatabase::objects
+  Transform T_camera_object = Transform::Identity();
+  Verification verification;
+  double confidence = 0;  ///< pose_confidence(verification)
+};
+
 struct RecognizerOptions {
   SegmentOptions segment;
   std::size_t matches = 20;      ///< nearest views tried per cluster and object (thesis: 20, one object)
@@ -36,6 +45,14 @@ struct RecognizerOptions {
   float icp_voxel_m = 0.005f;    ///< the cluster is thinned to this for ICP (thesis: 5 mm)
   IcpOptions icp;
   VerifyOptions verify;
+  /// A pose that passes verification's bounds is accepted only when its confidence (pose/confidence:
+  /// the estimated probability that it is right) reaches this. A detection's score is that confidence.
+  /// The default is the confidence that kept 98 % of the poses right on the simulated rooms and
+  /// clutter the model was fit on (docs/CONFIDENCE.md).
+  double min_confidence = 0.917;
+  /// Called in order, on the calling thread, for every hypothesis that passed verification's bounds,
+  /// before the confidence threshold: what the confidence model is fit on (viewpose bop --hypotheses).
+  std::function<void(const VerifiedHypothesis&)> on_verified;
   /// Verification draws each object's mesh simplified to within this (0: the mesh as it is). CAD and
   /// scanned meshes hold tens of thousands of triangles where a few hundred draw the same depth to
   /// within 2 mm, two fifths of the smallest depth tolerance; drawing was most of a real frame's time.
@@ -97,12 +114,14 @@ struct Detection {
   std::string object_name;
   std::uint32_t object_index = 0;  ///< into ViewDatabase::objects
   Transform T_camera_object = Transform::Identity();  ///< metres
-  double score = 0;          ///< verification score in [0, 1]: share of the model and cluster explained
+  double score = 0;          ///< confidence in [0, 1]: the estimated probability that the pose is right (pose/confidence)
   double icp_fitness = 0;    ///< share of cluster points with a model correspondence
   double icp_rmse_m = 0;     ///< RMS point-to-plane residual
   int match_rank = 0;        ///< 0 = the nearest view
   float roll_deg = 0;        ///< the CRH roll that led to it
-  double runner_up_score = 0;  ///< best score of the half-turned alternatives (0 if none passed): a margin
+  /// Best verification score (Verification::score) of the half-turned alternatives (0 if none
+  /// passed): verification.score minus this is the margin by which the chosen side won.
+  double runner_up_score = 0;
   std::size_t cluster_points = 0;
   bool from_split_cluster = false;  ///< found in a part of a cluster, or in what another detection left of it
   Verification verification;
@@ -155,6 +174,8 @@ class Recognizer {
     Transform T_camera_object = Transform::Identity();
     Verification v;
     bool verified = false;
+    double confidence = 0;  // pose_confidence(v), for those v passes
+    bool accepted = false;  // v passes and the confidence reaches min_confidence
     double icp_ms = 0, verify_ms = 0;
   };
   // Each initial pose of `object`, refined and verified, in parallel when allowed; the results in
