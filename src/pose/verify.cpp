@@ -27,19 +27,20 @@ float depth_tolerance(float z_m, const VerifyOptions& o) {
 namespace {
 
 // Sums for a least-squares plane through points: RMS distance from the best plane at the end.
+// Scalar moments (the six distinct products): this runs for every inlier pixel, twice.
 struct PlaneSums {
-  double n = 0;
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
-  void add(const Eigen::Vector3d& p) {
+  double n = 0, x = 0, y = 0, z = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+  void add(double px, double py, double pz) {
     n += 1;
-    sum += p;
-    outer += p * p.transpose();
+    x += px, y += py, z += pz;
+    xx += px * px, xy += px * py, xz += px * pz, yy += py * py, yz += py * pz, zz += pz * pz;
   }
   double rms_distance() const {
     if (n < 3) return 0;
-    const Eigen::Vector3d mean = sum / n;
-    const Eigen::Matrix3d cov = outer / n - mean * mean.transpose();
+    const Eigen::Vector3d mean(x / n, y / n, z / n);
+    Eigen::Matrix3d cov;
+    cov << xx / n, xy / n, xz / n, xy / n, yy / n, yz / n, xz / n, yz / n, zz / n;
+    cov -= mean * mean.transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov, Eigen::EigenvaluesOnly);
     return std::sqrt(std::max(0.0, eig.eigenvalues()(0)));
   }
@@ -128,6 +129,7 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
   double depth_sum = 0;
   std::size_t depth_count = 0;
   PlaneSums observed_plane, model_plane;
+  const double inv_fx = 1.0 / K.fx, inv_fy = 1.0 / K.fy;
   double model_sq = 0;
   // The outline is looked at this many camera pixels beyond the edge: past the sensor's lateral
   // jitter (about a pixel) and the edge margin.
@@ -155,14 +157,6 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
       const float zm = row[xs];
       if (!std::isfinite(zm)) continue;
       const float tol = depth_tolerance(zm, o);
-      {
-        // An outline sample: a neighbour ms away has no model. Look beyond it, outward.
-        const int x = u0 + xs * step;
-        if (!std::isfinite(row[xs + ms])) outline_look(x + reach_out, y, zm, tol);
-        if (!std::isfinite(row[xs - ms])) outline_look(x - reach_out, y, zm, tol);
-        if (!std::isfinite(down[xs])) outline_look(x, y + reach_out, zm, tol);
-        if (!std::isfinite(up[xs])) outline_look(x, y - reach_out, zm, tol);
-      }
       // Only pixels well inside the model's outline and away from its own depth steps are judged:
       // edges are where the sensor's lateral noise lives. (A NaN neighbour fails the test.)
       if (!(std::abs(row[xs + ms] - zm) <= tol && std::abs(row[xs - ms] - zm) <= tol && std::abs(up[xs] - zm) <= tol &&
@@ -186,13 +180,34 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
       else {
         ++v.inliers;
         supported += cluster_here;
-        const double rx = (x - K.cx) / K.fx, ry = (y - K.cy) / K.fy;
-        observed_plane.add(Eigen::Vector3d(rx * zo, ry * zo, zo));
-        model_plane.add(Eigen::Vector3d(rx * zm, ry * zm, zm));
+        const double rx = (x - K.cx) * inv_fx, ry = (y - K.cy) * inv_fy;
+        observed_plane.add(rx * zo, ry * zo, zo);
+        model_plane.add(rx * zm, ry * zm, zm);
         model_sq += static_cast<double>(zo - zm) * static_cast<double>(zo - zm);
       }
       depth_sum += zm;
       ++depth_count;
+    }
+  }
+  // The outline, in a pass of its own (inside the loop above it slowed every pixel's judgement): a
+  // sample whose neighbour ms away has no model is on the silhouette; look beyond it, outward.
+  for (int ys = ms; ys < Kx.height - ms; ++ys) {
+    const int y = v0 + ys * step;
+    const float* row = model.depth.depth_m.data() + static_cast<std::ptrdiff_t>(ys) * stride;
+    const float* up = row - static_cast<std::ptrdiff_t>(ms) * stride;
+    const float* down = row + static_cast<std::ptrdiff_t>(ms) * stride;
+    for (int xs = ms; xs < Kx.width - ms; ++xs) {
+      const float zm = row[xs];
+      if (!std::isfinite(zm)) continue;
+      const bool right = std::isfinite(row[xs + ms]), left = std::isfinite(row[xs - ms]);
+      const bool below = std::isfinite(down[xs]), above = std::isfinite(up[xs]);
+      if (right && left && below && above) continue;
+      const float tol = depth_tolerance(zm, o);
+      const int x = u0 + xs * step;
+      if (!right) outline_look(x + reach_out, y, zm, tol);
+      if (!left) outline_look(x - reach_out, y, zm, tol);
+      if (!below) outline_look(x, y + reach_out, zm, tol);
+      if (!above) outline_look(x, y - reach_out, zm, tol);
     }
   }
   // Counts in the camera's pixels: each sample stands for s x s of them.
