@@ -106,7 +106,8 @@ nlohmann::json recognition_json(const Recognition& r, bool with_times) {
                                       {"model_relief_m", d.verification.model_relief_m}}}});
   }
   nlohmann::json j = {{"detections", dets}, {"cut_short", r.cut_short}, {"clusters", r.clusters},
-                      {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses}};
+                      {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses},
+                      {"dropped_as_explained", r.dropped_as_explained}};
   if (with_times) {
     const StageTimes& t = r.times;
     j["times_ms"] = {{"downsample", t.downsample_ms}, {"segment", t.segment_ms}, {"normals", t.normals_ms},

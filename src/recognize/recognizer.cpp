@@ -68,8 +68,39 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     if (out_of_time(out)) break;
     recognize_region(cluster_points(seg.points, cluster), frame, out, 0);
   }
+  if (options_.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
   out.times.total_ms = ms_since(start);
   return out;
+}
+
+void Recognizer::resolve_scene(const Frame& frame, Recognition& out) const {
+  const auto t = Clock::now();
+  std::vector<std::size_t> order(out.detections.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  // The most trusted first: confidence, then how well the pose fits (confidences saturate near 1).
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const Detection &da = out.detections[a], &db = out.detections[b];
+    if (da.score != db.score) return da.score > db.score;
+    return da.verification.score > db.verification.score;
+  });
+  std::vector<std::vector<std::uint32_t>> claims(order.size());
+  const auto n = static_cast<std::ptrdiff_t>(order.size());
+#pragma omp parallel for schedule(dynamic, 1) if (options_.parallel_hypotheses)
+  for (std::ptrdiff_t k = 0; k < n; ++k) {
+    const Detection& d = out.detections[order[static_cast<std::size_t>(k)]];
+    claims[static_cast<std::size_t>(k)] =
+        claimed_pixels(verify_model(d.object_index), d.T_camera_object, frame.depth, frame.K, options_.verify);
+  }
+  const std::vector<ClaimVerdict> verdicts = resolve_claims(claims, options_.scene_claims);
+  std::vector<char> keep(order.size(), 0);
+  for (std::size_t k = 0; k < order.size(); ++k) keep[order[k]] = verdicts[k].kept ? 1 : 0;
+  std::vector<Detection> kept;
+  for (std::size_t i = 0; i < out.detections.size(); ++i) {
+    if (keep[i]) kept.push_back(std::move(out.detections[i]));
+  }
+  out.dropped_as_explained += out.detections.size() - kept.size();
+  out.detections = std::move(kept);
+  out.times.verify_ms += ms_since(t);
 }
 
 void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, Recognition& out, int depth) const {

@@ -17,6 +17,7 @@
 #include "viewpose/database/view_database.hpp"
 #include "viewpose/describe/crh.hpp"
 #include "viewpose/pose/icp.hpp"
+#include "viewpose/pose/scene_claims.hpp"
 #include "viewpose/pose/verify.hpp"
 #include "viewpose/recognize/frame.hpp"
 #include "viewpose/segment/convex_segments.hpp"
@@ -107,6 +108,10 @@ struct RecognizerOptions {
   /// rolls run together), so a frame overruns it by at most one view's refinement, a few ms. A
   /// pose found in time is kept even if its half-turn check had to be left out.
   double deadline_ms = 0;
+  /// The frame as a whole (pose/scene_claims.hpp): of detections that explain the same pixels,
+  /// the more confident is kept; one whose evidence another already explains is dropped.
+  bool resolve_scene_claims = true;
+  SceneClaimOptions scene_claims;
 };
 
 struct Detection {
@@ -142,6 +147,8 @@ struct Recognition {
   std::size_t hypotheses = 0;  ///< poses refined and verified
   std::size_t split_clusters = 0;  ///< clusters in which nothing passed, tried again in convex parts
   std::size_t regions = 0;  ///< clusters, parts and remainders described and matched against the database
+  /// Detections dropped because another, more confident one explains the same pixels.
+  std::size_t dropped_as_explained = 0;
   /// RecognizerOptions::deadline_ms ran out: clusters, views or checks were left untried.
   bool cut_short = false;
   Clock::time_point started{};  ///< when recognize() began (the deadline counts from it)
@@ -195,6 +202,8 @@ class Recognizer {
   const IcpTarget& icp_target(std::uint32_t object) const { return *prepared(object).target; }
   // Past the deadline (and marks `out` cut short): no further views, parts or checks are tried.
   bool out_of_time(Recognition& out) const;
+  // Drops the detections whose pixels more confident ones already explain (resolve_scene_claims).
+  void resolve_scene(const Frame& frame, Recognition& out) const;
   // What verification draws of an object.
   VerifyModel verify_model(std::uint32_t object) const;
 
