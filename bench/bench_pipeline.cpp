@@ -10,6 +10,7 @@
 #include "viewpose/describe/crh.hpp"
 #include "viewpose/describe/describe.hpp"
 #include "viewpose/pose/icp.hpp"
+#include "viewpose/pose/ppf.hpp"
 #include "viewpose/pose/verify.hpp"
 #include "viewpose/recognize/recognizer.hpp"
 #include "viewpose/render/shapes.hpp"
@@ -145,6 +146,26 @@ void BM_VerifyOneHypothesis(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_VerifyOneHypothesis)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Point pair features (issue 19): the jug's pair table, and the votes of the jug's cluster.
+void BM_PpfBuildJugTable(benchmark::State& state) {
+  const Inputs& in = inputs();
+  const DatabaseObject& o = in.db.objects[0];
+  for (auto _ : state) benchmark::DoNotOptimize(PpfModel(o.model_points, o.model_normals, o.diameter_m));
+}
+BENCHMARK(BM_PpfBuildJugTable)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_PpfHypothesesJugCluster(benchmark::State& state) {
+  const Inputs& in = inputs();
+  const DatabaseObject& o = in.db.objects[0];
+  const PpfModel model(o.model_points, o.model_normals, o.diameter_m);
+  const OrientedPoints scene = ppf_sample(in.description.cloud.points, in.description.cloud.normals, model.sample_step_m(),
+                                          model.options().normal_split_deg);
+  state.SetLabel(std::to_string(scene.size()) + " scene points, " + std::to_string(model.sampled().size()) + " model points, " +
+                 std::to_string(model.pairs()) + " pairs");
+  for (auto _ : state) benchmark::DoNotOptimize(model.hypotheses(scene));
+}
+BENCHMARK(BM_PpfHypothesesJugCluster)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_RecognizeFrame(benchmark::State& state) {
   const Inputs& in = inputs();

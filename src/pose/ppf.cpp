@@ -1,0 +1,294 @@
+#include "viewpose/pose/ppf.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <Eigen/Geometry>
+
+#include "viewpose/core/error.hpp"
+#include "viewpose/core/kdtree.hpp"
+
+namespace viewpose {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The rigid motion that takes `p` to the origin and its normal `n` onto +x.
+Transform local_frame(const Eigen::Vector3f& p, const Eigen::Vector3f& n) {
+  const Eigen::Matrix3d R = Eigen::Quaterniond::FromTwoVectors(n.cast<double>(), Eigen::Vector3d::UnitX()).toRotationMatrix();
+  return make_transform(R, -R * p.cast<double>());
+}
+
+// The second point's angle about +x in the first point's local frame.
+float pair_alpha(const Transform& T_local, const Eigen::Vector3f& p2) {
+  const Eigen::Vector3d q = T_local * p2.cast<double>();
+  return static_cast<float>(std::atan2(q.z(), q.y()));
+}
+
+// Angles about the normal in fine units: a whole number of them in every alpha bin, so that a
+// vote's bin is integer arithmetic (most of the time goes to votes).
+constexpr std::uint32_t kAlphaUnits = 30 * 64 * 7;  // divisible by 30, 40, 45, 60, 64, ...
+std::uint32_t alpha_units(float alpha) {
+  double a = alpha < 0 ? alpha + 2 * kPi : alpha;
+  return std::min(kAlphaUnits - 1, static_cast<std::uint32_t>(a / (2 * kPi) * kAlphaUnits));
+}
+
+struct Feature {
+  float distance = 0, a1 = 0, a2 = 0, a3 = 0;
+};
+
+// F(p1, p2); false for coincident points.
+bool pair_feature(const Eigen::Vector3f& p1, const Eigen::Vector3f& n1, const Eigen::Vector3f& p2, const Eigen::Vector3f& n2,
+                  Feature& f) {
+  const Eigen::Vector3f d = p2 - p1;
+  f.distance = d.norm();
+  if (!(f.distance > 1e-6f)) return false;
+  const Eigen::Vector3f u = d / f.distance;
+  const auto angle = [](float c) { return std::acos(std::clamp(c, -1.0f, 1.0f)); };
+  f.a1 = angle(n1.dot(u));
+  f.a2 = angle(n2.dot(u));
+  f.a3 = angle(n1.dot(n2));
+  return true;
+}
+
+// The bin of x (in steps), and the neighbouring one when x lies within `spread` of its edge: up to
+// two bins, the own first. Returns how many.
+int bins_of(float x_in_steps, int bins, double spread, int out[2]) {
+  const int b = std::clamp(static_cast<int>(std::floor(x_in_steps)), 0, bins - 1);
+  out[0] = b;
+  if (spread <= 0) return 1;
+  const double frac = x_in_steps - b;
+  if (frac < spread && b > 0) return out[1] = b - 1, 2;
+  if (frac > 1.0 - spread && b < bins - 1) return out[1] = b + 1, 2;
+  return 1;
+}
+
+}  // namespace
+
+OrientedPoints ppf_sample(std::span<const Eigen::Vector3f> points, std::span<const Eigen::Vector3f> normals, float step_m,
+                          double normal_split_deg) {
+  if (points.size() != normals.size()) throw Error("ppf: points and normals differ in number");
+  if (!(step_m > 0)) throw Error("ppf: the sampling step must be positive");
+  struct Keyed {
+    std::int64_t x, y, z;
+    std::uint32_t index;
+  };
+  std::vector<Keyed> keyed;
+  keyed.reserve(points.size());
+  for (std::uint32_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite() || !normals[i].allFinite() || normals[i].squaredNorm() < 0.25f) continue;
+    keyed.push_back({static_cast<std::int64_t>(std::floor(points[i].x() / step_m)),
+                     static_cast<std::int64_t>(std::floor(points[i].y() / step_m)),
+                     static_cast<std::int64_t>(std::floor(points[i].z() / step_m)), i});
+  }
+  std::sort(keyed.begin(), keyed.end(), [](const Keyed& a, const Keyed& b) {
+    return std::tie(a.x, a.y, a.z, a.index) < std::tie(b.x, b.y, b.z, b.index);
+  });
+  const float cos_split = static_cast<float>(std::cos(normal_split_deg * kPi / 180.0));
+  OrientedPoints out;
+  struct Group {
+    Eigen::Vector3f sum_p = Eigen::Vector3f::Zero(), sum_n = Eigen::Vector3f::Zero(), first_n = Eigen::Vector3f::Zero();
+    int count = 0;
+  };
+  std::vector<Group> groups;
+  for (std::size_t begin = 0; begin < keyed.size();) {
+    std::size_t end = begin;
+    while (end < keyed.size() && keyed[end].x == keyed[begin].x && keyed[end].y == keyed[begin].y && keyed[end].z == keyed[begin].z) ++end;
+    groups.clear();
+    for (std::size_t k = begin; k < end; ++k) {
+      const Eigen::Vector3f n = normals[keyed[k].index].normalized();
+      Group* g = nullptr;
+      for (Group& candidate : groups) {
+        if (candidate.first_n.dot(n) >= cos_split) {
+          g = &candidate;
+          break;
+        }
+      }
+      if (!g) {
+        Group fresh;
+        fresh.first_n = n;
+        groups.push_back(fresh);
+        g = &groups.back();
+      }
+      g->sum_p += points[keyed[k].index];
+      g->sum_n += n;
+      ++g->count;
+    }
+    for (const Group& g : groups) {
+      if (g.sum_n.squaredNorm() < 1e-12f) continue;
+      out.points.push_back(g.sum_p / static_cast<float>(g.count));
+      out.normals.push_back(g.sum_n.normalized());
+    }
+    begin = end;
+  }
+  return out;
+}
+
+std::size_t PpfModel::key(int d, int a1, int a2, int a3) const {
+  const auto A = static_cast<std::size_t>(feature_angle_bins_);
+  return ((static_cast<std::size_t>(d) * A + static_cast<std::size_t>(a1)) * A + static_cast<std::size_t>(a2)) * A +
+         static_cast<std::size_t>(a3);
+}
+
+PpfModel::PpfModel(std::span<const Eigen::Vector3f> points, std::span<const Eigen::Vector3f> normals, double diameter_m,
+                   const PpfOptions& options)
+    : options_(options), diameter_m_(diameter_m) {
+  if (!(diameter_m > 0) || !std::isfinite(diameter_m)) throw Error("ppf: the object's diameter must be positive");
+  if (!(options.sample_fraction > 0 && options.sample_fraction < 1) || options.angle_bins < 4 ||
+      kAlphaUnits % static_cast<std::uint32_t>(options.angle_bins) != 0 || options.reference_stride < 1) {
+    throw Error("ppf: bad options (sample_fraction in (0, 1), angle_bins >= 4 dividing 13440, reference_stride >= 1)");
+  }
+  step_m_ = static_cast<float>(options.sample_fraction * diameter_m);
+  distance_bins_ = static_cast<int>(std::floor(1.0 / options.sample_fraction)) + 1;
+  const double angle_step = 2 * kPi / options.angle_bins;
+  feature_angle_bins_ = static_cast<int>(std::ceil(kPi / angle_step - 1e-9));
+  sampled_ = ppf_sample(points, normals, step_m_, options.normal_split_deg);
+  if (sampled_.size() < 2) throw Error("ppf: the model has fewer than two oriented points");
+  const std::size_t n = sampled_.size();
+  T_local_model_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) T_local_model_[i] = local_frame(sampled_.points[i], sampled_.normals[i]);
+
+  // Every ordered pair within the diameter, keyed; counted first, then placed (one pass each).
+  const std::size_t keys = key(distance_bins_ - 1, feature_angle_bins_ - 1, feature_angle_bins_ - 1, feature_angle_bins_ - 1) + 1;
+  std::vector<std::uint32_t> pair_key;
+  std::vector<Entry> pair_entry;
+  const float max_d = static_cast<float>(diameter_m);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      Feature f;
+      if (i == j || !pair_feature(sampled_.points[i], sampled_.normals[i], sampled_.points[j], sampled_.normals[j], f) ||
+          f.distance > max_d) {
+        continue;
+      }
+      const int d = std::min(distance_bins_ - 1, static_cast<int>(f.distance / step_m_));
+      const auto a = [&](float x) { return std::min(feature_angle_bins_ - 1, static_cast<int>(x / angle_step)); };
+      pair_key.push_back(static_cast<std::uint32_t>(key(d, a(f.a1), a(f.a2), a(f.a3))));
+      pair_entry.push_back({static_cast<std::uint32_t>(i), alpha_units(pair_alpha(T_local_model_[i], sampled_.points[j]))});
+    }
+  }
+  key_start_.assign(keys + 1, 0);
+  for (const std::uint32_t k : pair_key) ++key_start_[k + 1];
+  std::partial_sum(key_start_.begin(), key_start_.end(), key_start_.begin());
+  entries_.resize(pair_entry.size());
+  std::vector<std::uint32_t> fill(key_start_.begin(), key_start_.end() - 1);
+  for (std::size_t p = 0; p < pair_entry.size(); ++p) entries_[fill[pair_key[p]]++] = pair_entry[p];
+}
+
+std::vector<PpfHypothesis> PpfModel::hypotheses(const OrientedPoints& scene) const {
+  std::vector<PpfHypothesis> out;
+  if (scene.size() < 2) return out;
+  const int bins = options_.angle_bins;
+  const double angle_step = 2 * kPi / bins;
+  const KdTree tree(scene.points);
+  const auto stride = static_cast<std::size_t>(options_.reference_stride);
+  const std::size_t references = (scene.size() + stride - 1) / stride;
+  struct Peak {
+    Transform T_camera_object = Transform::Identity();
+    std::uint32_t votes = 0;
+  };
+  std::vector<Peak> peaks(references);
+  const float radius = static_cast<float>(diameter_m_);
+  const std::size_t model_points = sampled_.size();
+  const std::uint32_t fine_per_bin = kAlphaUnits / static_cast<std::uint32_t>(bins);
+  const auto max_bucket = static_cast<std::uint32_t>(std::max(1.0, options_.max_bucket_per_point * static_cast<double>(sampled_.size())));
+
+#pragma omp parallel
+  {
+    std::vector<std::uint32_t> votes(model_points * static_cast<std::size_t>(bins), 0);
+    std::vector<std::uint32_t> touched, neighbours;
+#pragma omp for schedule(dynamic, 16)
+    for (std::ptrdiff_t r = 0; r < static_cast<std::ptrdiff_t>(references); ++r) {
+      const std::size_t s1 = static_cast<std::size_t>(r) * stride;
+      const Eigen::Vector3f& p1 = scene.points[s1];
+      const Eigen::Vector3f& n1 = scene.normals[s1];
+      const Transform T_local_scene = local_frame(p1, n1);
+      tree.radius_search(p1, radius, neighbours);
+      // The peak: the model point and angle most pairs agree on (of equals, the lowest slot).
+      std::uint32_t best = 0, best_slot = 0;
+      for (const std::uint32_t s2 : neighbours) {
+        Feature f;
+        if (s2 == s1 || !pair_feature(p1, n1, scene.points[s2], scene.normals[s2], f)) continue;
+        const std::uint32_t alpha_scene_fine = alpha_units(pair_alpha(T_local_scene, scene.points[s2]));
+        int d[2], a1[2], a2[2], a3[2];
+        const double spread = options_.spread_fraction;
+        const int nd = bins_of(f.distance / step_m_, distance_bins_, spread, d);
+        const int n1b = bins_of(static_cast<float>(f.a1 / angle_step), feature_angle_bins_, spread, a1);
+        const int n2b = bins_of(static_cast<float>(f.a2 / angle_step), feature_angle_bins_, spread, a2);
+        const int n3b = bins_of(static_cast<float>(f.a3 / angle_step), feature_angle_bins_, spread, a3);
+        for (int i = 0; i < nd; ++i)
+          for (int j = 0; j < n1b; ++j)
+            for (int k = 0; k < n2b; ++k)
+              for (int l = 0; l < n3b; ++l) {
+                const std::size_t kk = key(d[i], a1[j], a2[k], a3[l]);
+                if (key_start_[kk + 1] - key_start_[kk] > max_bucket) continue;
+                for (std::uint32_t e = key_start_[kk]; e < key_start_[kk + 1]; ++e) {
+                  const Entry& entry = entries_[e];
+                  // phi = alpha_scene - alpha_model in fine units, wrapped into [0, 2 pi).
+                  const std::uint32_t phi = (alpha_scene_fine + kAlphaUnits - entry.alpha) % kAlphaUnits;
+                  const std::size_t slot = entry.point * static_cast<std::size_t>(bins) + phi / fine_per_bin;
+                  const std::uint32_t v = ++votes[slot];
+                  if (v == 1) touched.push_back(static_cast<std::uint32_t>(slot));
+                  if (v > best || (v == best && slot < best_slot)) best = v, best_slot = static_cast<std::uint32_t>(slot);
+                }
+              }
+      }
+      for (const std::uint32_t slot : touched) votes[slot] = 0;
+      touched.clear();
+      if (best == 0) continue;
+      const std::uint32_t m = best_slot / static_cast<std::uint32_t>(bins);
+      const double phi = (static_cast<double>(best_slot % static_cast<std::uint32_t>(bins)) + 0.5) * angle_step;
+      const Transform Rx = make_transform(Eigen::AngleAxisd(phi, Eigen::Vector3d::UnitX()).toRotationMatrix(), Eigen::Vector3d::Zero());
+      peaks[static_cast<std::size_t>(r)] = {T_local_scene.inverse() * Rx * T_local_model_[m], best};
+    }
+  }
+
+  // Poses clustered, most votes first: each joins the first cluster (most votes) it is near.
+  std::vector<std::size_t> order(peaks.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return peaks[a].votes > peaks[b].votes; });
+  struct PoseCluster {
+    Transform first;
+    Eigen::Vector3d sum_t = Eigen::Vector3d::Zero();
+    Eigen::Vector4d sum_q = Eigen::Vector4d::Zero();
+    double votes = 0;
+    std::size_t poses = 0;
+  };
+  std::vector<PoseCluster> clusters;
+  const double max_t = options_.cluster_distance_fraction * diameter_m_;
+  const double max_angle = options_.cluster_angle_deg * kPi / 180.0;
+  for (const std::size_t i : order) {
+    const Peak& p = peaks[i];
+    if (p.votes == 0) break;
+    PoseCluster* home = nullptr;
+    for (PoseCluster& c : clusters) {
+      if ((c.first.translation() - p.T_camera_object.translation()).norm() > max_t) continue;
+      const Eigen::AngleAxisd diff(c.first.linear().transpose() * p.T_camera_object.linear());
+      if (std::abs(diff.angle()) > max_angle) continue;
+      home = &c;
+      break;
+    }
+    if (!home) {
+      clusters.push_back({p.T_camera_object});
+      home = &clusters.back();
+    }
+    Eigen::Quaterniond q(p.T_camera_object.linear());
+    const Eigen::Quaterniond q0(home->first.linear());
+    if (q.dot(q0) < 0) q.coeffs() = -q.coeffs();
+    home->sum_t += p.votes * p.T_camera_object.translation();
+    home->sum_q += p.votes * q.coeffs();
+    home->votes += p.votes;
+    ++home->poses;
+  }
+  std::stable_sort(clusters.begin(), clusters.end(), [](const PoseCluster& a, const PoseCluster& b) { return a.votes > b.votes; });
+  for (const PoseCluster& c : clusters) {
+    if (out.size() >= options_.max_hypotheses) break;
+    Eigen::Quaterniond q;
+    q.coeffs() = c.sum_q.normalized();
+    out.push_back({make_transform(q.toRotationMatrix(), c.sum_t / c.votes), c.votes, c.poses});
+  }
+  return out;
+}
+
+}  // namespace viewpose
