@@ -268,7 +268,7 @@ def write_real(w, real):
         ev_open, ev_task = dev["open"]["eval"], dev.get("task", {}).get("eval")
         w("Nine real frames in the BOP layout with ground truth: video 0000 frames 3-10 (a gelatin box, a mug and a foam")
         w("brick on a desk, the mug and the brick touching, about 0.6 m) and video 0014 frame 2 (another desk: a")
-        w("master chef can, a cracker box, a mustard bottle and a pitcher, about 0.9 m). The database holds all seven")
+        w("master chef can, a sugar box, a potted meat can and a pitcher, objects 1, 3, 9, 11, about 0.9 m). The database holds all seven")
         w("objects (BOP YCB-V meshes, 80 views each). *Open mode* is `viewpose bop` as a robot would run it: any object,")
         w("any number, so every pose that is not right is a false positive (ADD-S above 10 % of the diameter). *BOP19")
         w(f"task* is `bop --targets {dev.get('targets_file', '')}`: each image's objects and counts are given, at most")
