@@ -18,6 +18,9 @@ BUILD := build
 # LLVM's OpenMP tool that tells ThreadSanitizer about libomp's barriers and locks (libomp-dev).
 ARCHER = $(firstword $(wildcard /usr/lib/llvm-*/lib/libarcher.so))
 CMAKE_FLAGS ?=
+# The first lines a user sees are the build's and the demo's, not make's "Entering directory" (passed on to
+# the makefiles CMake generates, which cmake --build runs).
+MAKEFLAGS += --no-print-directory
 
 .PHONY: all deps build demo test test-sanitize test-thread fuzz check bench bench-pcl results confidence pcl-fixtures clean
 
@@ -30,7 +33,10 @@ build: deps
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
 	@cmake --build $(BUILD) -j $(JOBS)
 
-demo: build
+# The demo needs the command alone: its build is shorter, and says less before the demo speaks.
+demo: deps
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) >/dev/null
+	@cmake --build $(BUILD) -j $(JOBS) --target viewpose_cli
 	@./$(BUILD)/viewpose demo --out demo-out
 
 test: build

@@ -83,7 +83,7 @@ void add_db_command(CLI::App& app, int& exit_code) {
   CLI::App* build = db_cmd->add_subcommand("build", "Render every object from a view sphere and describe each view");
   build->add_option("models", b->models, "Objects: jug, box, can, mug, or mesh files (OBJ, STL, PLY, ...)");
   build->add_option("--bop-models", b->bop_models, "A BOP models/ folder: every obj_NNNNNN.ply, with id NNNNNN");
-  build->add_option("--unit", b->unit, "Unit of the mesh files: m or mm")->check(CLI::IsMember({"m", "mm"}))->capture_default_str();
+  build->add_option("--unit", b->unit, "Unit of the mesh files: m, mm or cm")->check(CLI::IsMember({"m", "mm", "cm"}))->capture_default_str();
   build->add_option("-o,--out", b->out, "Database file to write")->required();
   build->add_option("--views", b->views, "Views per object: 80 (the thesis) or 320")->check(CLI::IsMember({20, 80, 320}))->capture_default_str();
   build->add_option("--distance", b->distance, "Camera distance from the object's centre, metres")->check(CLI::Range(0.2, 10.0))->capture_default_str();

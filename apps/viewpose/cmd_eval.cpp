@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "model_args.hpp"
+#include "viewpose/core/error.hpp"
 #include "viewpose/eval/bop_scores.hpp"
 #include "viewpose/eval/evaluate.hpp"
 #include "viewpose/io/file.hpp"
@@ -108,6 +109,11 @@ void add_eval_command(CLI::App& app, int& exit_code) {
     // models, or T-LESS's models_cad); a folder asked for by name, that one.
     const BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir.empty() ? "models" : o->models_dir});
     if (o->models_dir.empty()) o->models_dir = ds.eval_models_dir;
+    if (o->models_dir.empty()) {
+      throw viewpose::Error(fmt::format("{}: no models folder (models/ or models_eval/ with obj_NNNNNN.ply, in mm): scoring needs "
+                              "the meshes; copy the dataset's models in, or name a folder with --models-dir",
+                              o->dataset));
+    }
     std::vector<std::string> notes = ds.notes;
     const std::vector<BopResult> results = read_bop_results(o->results, &notes);
     for (const std::string& note : notes) fmt::print(stderr, "viewpose: note: {}\n", note);

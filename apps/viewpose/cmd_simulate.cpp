@@ -103,7 +103,7 @@ void add_simulate_command(CLI::App& app, int& exit_code) {
   cmd->add_option("-o,--out", o->out, "Dataset folder to write")->required();
   cmd->add_option("--model", o->models, "Objects: jug, box, can, mug, or mesh files (repeat for several)")
       ->capture_default_str();
-  cmd->add_option("--unit", o->unit, "Unit of mesh files: m or mm")->check(CLI::IsMember({"m", "mm"}))->capture_default_str();
+  cmd->add_option("--unit", o->unit, "Unit of mesh files: m, mm or cm")->check(CLI::IsMember({"m", "mm", "cm"}))->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of every random choice")->capture_default_str();
   cmd->add_flag("--no-noise", o->no_noise, "Write the rendered depth without the sensor model");
   cmd->add_option("--orientations", o->orientations, "seed-experiment: orientations per distance")

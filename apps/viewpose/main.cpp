@@ -26,6 +26,8 @@ int main(int argc, char** argv) {
                ": find known objects in one depth frame and estimate their 6-DoF poses from CAD models"};
   app.set_version_flag("--version", std::string(VIEWPOSE_VERSION));
   app.require_subcommand(1);
+  app.footer("Exit status: 0 done; 1 bad input or a failure (one line on stderr says which); 2 a usage error "
+             "(an unknown option, a missing argument or file).");
   // Accepted before or after the command: `viewpose --threads 1 bop ...` or `viewpose bop ... --threads 1`.
   app.fallthrough();
   app.add_option("--threads", "Threads for every parallel stage (default: every core); results do not depend on it")
@@ -44,7 +46,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version end well; every other parse error is a usage error: exit status 2, the
+    // convention of command-line tools (CLI11's own codes, 105 for a missing file, say nothing).
+    const int cli_code = app.exit(e);
+    return cli_code == 0 ? 0 : 2;
   } catch (const viewpose::Error& e) {
     fmt::print(stderr, "viewpose: error: {}\n", e.what());
     return 1;

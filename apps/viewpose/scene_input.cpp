@@ -2,7 +2,10 @@
 
 #include <filesystem>
 
+#include <cmath>
+
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "viewpose/core/error.hpp"
 #include "viewpose/io/depth_png.hpp"
@@ -17,6 +20,7 @@ Frame load_scene(const std::string& path, const CameraFlags& camera) {
   if (const auto cam = camera.camera()) K = cam->K;
   if (ext == ".png") {
     DepthImage depth = read_depth_png(path, camera.depth_scale() / 1000.0);
+    if (const std::string w = depth_scale_warning(depth, camera.depth_scale()); !w.empty()) spdlog::warn("{}: {}", path, w);
     if (!K) throw Error(fmt::format("{}: a depth image needs its camera: give --camera camera.json or --intrinsics", path));
     if (K->width == 0) {
       K->width = depth.width;
@@ -24,8 +28,16 @@ Frame load_scene(const std::string& path, const CameraFlags& camera) {
     }
     return frame_from_depth(std::move(depth), *K);
   }
-  if (ext == ".pcd") return frame_from_cloud(read_pcd(path).cloud, K);
-  if (ext == ".ply") return frame_from_cloud(read_ply(path).cloud, K);
+  if (ext == ".pcd" || ext == ".ply") {
+    Frame frame = frame_from_cloud(ext == ".pcd" ? read_pcd(path).cloud : read_ply(path).cloud, K);
+    // Clouds carry no unit; PCL's and viewpose's are metres. One in millimetres lies kilometres away.
+    const double median = median_depth_m(frame.depth);
+    if (std::isfinite(median) && (median > 5.0 || median < 0.3)) {
+      spdlog::warn("{}: median depth {:.3g} m, outside what depth cameras measure (0.3-5 m): clouds are read in metres{}",
+                   path, median, median > 100.0 ? "; this one looks like millimetres" : "");
+    }
+    return frame;
+  }
   throw Error(fmt::format("{}: a scene must be a depth .png, a .pcd or a .ply", path));
 }
 

@@ -12,14 +12,29 @@ namespace {
 constexpr float kMillimetreDiagonal = 10.0f;
 }  // namespace
 
-double metres_per_unit(LengthUnit unit) { return unit == LengthUnit::Metres ? 1.0 : 0.001; }
+double metres_per_unit(LengthUnit unit) {
+  switch (unit) {
+    case LengthUnit::Millimetres: return 0.001;
+    case LengthUnit::Centimetres: return 0.01;
+    case LengthUnit::Metres: break;
+  }
+  return 1.0;
+}
 
-std::string_view to_string(LengthUnit unit) { return unit == LengthUnit::Metres ? "m" : "mm"; }
+std::string_view to_string(LengthUnit unit) {
+  switch (unit) {
+    case LengthUnit::Millimetres: return "mm";
+    case LengthUnit::Centimetres: return "cm";
+    case LengthUnit::Metres: break;
+  }
+  return "m";
+}
 
 LengthUnit parse_length_unit(std::string_view text) {
   if (text == "m" || text == "metres" || text == "meters") return LengthUnit::Metres;
   if (text == "mm" || text == "millimetres" || text == "millimeters") return LengthUnit::Millimetres;
-  throw Error(fmt::format("unknown length unit '{}' (use m or mm)", text));
+  if (text == "cm" || text == "centimetres" || text == "centimeters") return LengthUnit::Centimetres;
+  throw Error(fmt::format("unknown length unit '{}' (use m, mm or cm)", text));
 }
 
 UnitGuess guess_length_unit(const BoundingBox& box) {
@@ -33,12 +48,23 @@ UnitGuess guess_length_unit(const BoundingBox& box) {
 }
 
 std::string unit_mismatch_warning(const BoundingBox& box, LengthUnit declared) {
-  const UnitGuess guess = guess_length_unit(box);
-  if (box.empty || guess.unit == declared) return {};
-  const float d = box.diagonal();
-  return declared == LengthUnit::Metres
-             ? fmt::format("read as metres the model spans {:.4g} m; it looks like millimetres (use unit mm)", d)
-             : fmt::format("read as millimetres the model spans {:.4g} mm; it looks like metres (use unit m)", d);
+  if (box.empty) return {};
+  const double d = box.diagonal();
+  const double across_m = d * metres_per_unit(declared);
+  if (across_m <= 10.0 && across_m >= 0.01) return {};
+  // The units in which this many file units make an object a hand or a robot deals with.
+  std::string likely;
+  for (const LengthUnit u : {LengthUnit::Millimetres, LengthUnit::Centimetres, LengthUnit::Metres}) {
+    const double m = d * metres_per_unit(u);
+    if (u == declared || m < 0.01 || m > 1.5) continue;
+    const std::string_view name = u == LengthUnit::Millimetres ? "millimetres" : u == LengthUnit::Centimetres ? "centimetres" : "metres";
+    likely += fmt::format("{}{} (--unit {})", likely.empty() ? "" : " or ", name, to_string(u));
+  }
+  const std::string_view as = declared == LengthUnit::Millimetres ? "millimetres" : declared == LengthUnit::Centimetres ? "centimetres" : "metres";
+  std::string w = across_m > 10.0 ? fmt::format("read as {} the model is {:.4g} m across", as, across_m)
+                                   : fmt::format("read as {} the model is {:.3g} mm across", as, across_m * 1000.0);
+  if (!likely.empty()) w += fmt::format("; it looks like {}", likely);
+  return w;
 }
 
 }  // namespace viewpose

@@ -373,6 +373,32 @@ ViewEntry describe_view(const DepthImage& depth, const Transform& T_view_object,
   return v;
 }
 
+namespace {
+
+// The view sphere's camera must see the whole object (else every view is a cut-out, or the camera
+// sits inside it), and the object must cover a few voxels. Both fail at once for a mesh read in the
+// wrong unit: a 17 cm bottle in millimetres is 170 m across as metres.
+void check_viewable(const std::string& name, const BoundingBox& box, const DatabaseParams& params) {
+  const CameraIntrinsics& K = params.camera;
+  const double half_px = std::min({K.cx, K.width - K.cx, K.cy, K.height - K.cy});
+  const double seen_m = 2.0 * params.distance_m * half_px / std::max(K.fx, K.fy);
+  const double d = box.diagonal();
+  if (d > seen_m) {
+    throw Error(fmt::format(
+        "db build: '{}' is {:.4g} m across, more than the view camera {:.2f} m away sees whole ({:.2f} m): a mesh in "
+        "millimetres or centimetres needs --unit mm or --unit cm; a large object, a larger --distance",
+        name, d, params.distance_m, seen_m));
+  }
+  if (d < 4.0 * params.voxel_m) {
+    throw Error(fmt::format(
+        "db build: '{}' is {:.3g} mm across, less than four {:.0f} mm voxels: a mesh in metres read as millimetres needs "
+        "--unit m",
+        name, d * 1000.0, params.voxel_m * 1000.0));
+  }
+}
+
+}  // namespace
+
 ViewDatabase build_view_database(std::span<const ObjectModel> objects, const DatabaseParams& params,
                                  const std::function<void(std::size_t, std::size_t)>& progress) {
   params.camera.validate();
@@ -390,6 +416,7 @@ ViewDatabase build_view_database(std::span<const ObjectModel> objects, const Dat
     object.symmetries = find_symmetries(mesh);
     db.objects.push_back(std::move(object));
     const BoundingBox box = bounding_box(mesh);
+    check_viewable(objects[o].name, box, params);
     const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
     const std::vector<Transform> poses = view_sphere_poses(centre, params.distance_m, params.subdivisions);
     RenderOptions render_options;
@@ -416,8 +443,16 @@ ViewDatabase build_view_database(std::span<const ObjectModel> objects, const Dat
     PointCloud model_grid = voxel_downsample(model, params.voxel_m);
     db.objects.back().model_points = std::move(model_grid.points);
     db.objects.back().model_normals = std::move(model_grid.normals);
+    std::size_t usable = 0;
     for (auto& e : entries) {
-      if (e.points.size() >= 3) db.views.push_back(std::move(e));  // a view that sees nothing is no use
+      if (e.points.size() < 3) continue;  // a view that sees nothing is no use
+      db.views.push_back(std::move(e));
+      ++usable;
+    }
+    // An object that no view sees would never be found: a database without it is not what was asked for.
+    if (usable == 0) {
+      throw Error(fmt::format("db build: '{}': no view sees it ({:.3g} m across, {:.3g} m voxels); is its unit right?",
+                              objects[o].name, box.diagonal(), params.voxel_m));
     }
     if (progress) progress(o + 1, objects.size());
   }

@@ -68,11 +68,9 @@ FileInfo inspect_depth_png(const fs::path& path, const InspectOptions& options) 
   }
   if (info.valid_points > 0) {
     info.notes.push_back(fmt::format("depth {:.4f} to {:.4f} m at {} m per unit", lo, hi, options.depth_png_metres_per_unit));
-    // Depth cameras measure up to about 10 m: farther than that, the scale is probably wrong.
-    if (hi > 10.0f) {
-      info.notes.push_back(fmt::format("depths past 10 m: is the scale right? At 0.1 mm per unit (YCB-Video) they would be "
-                                       "{:.4f} to {:.4f} m", lo * 0.0001 / options.depth_png_metres_per_unit,
-                                       hi * 0.0001 / options.depth_png_metres_per_unit));
+    // What `recognize` warns of, said here too: a median outside a depth camera's range.
+    if (const std::string w = depth_scale_warning(depth, options.depth_png_metres_per_unit * 1000.0); !w.empty()) {
+      info.notes.push_back("warning: " + w);
     }
   } else {
     info.problems.push_back("no valid pixels (every depth is 0)");

@@ -1,5 +1,7 @@
 // PNG reading and writing through libpng: 16-bit depth images and 8-bit RGB pictures.
 #include "viewpose/io/depth_png.hpp"
+
+#include <algorithm>
 #include "viewpose/io/image_png.hpp"
 
 #include <png.h>
@@ -82,7 +84,10 @@ bool decode(PngIo& io, std::vector<std::uint16_t>& pixels, std::vector<png_bytep
   const int bit_depth = png_get_bit_depth(png, info), colour = png_get_color_type(png, info);
   if (bit_depth != 16 || colour != PNG_COLOR_TYPE_GRAY) {
     std::snprintf(io.message, sizeof io.message,
-                  "is a %d-bit %s PNG; a depth image must be 16-bit greyscale", bit_depth, colour_type_name(colour));
+                  "is a %d-bit %s PNG; a depth image must be 16-bit greyscale%s", bit_depth, colour_type_name(colour),
+                  colour == PNG_COLOR_TYPE_RGB || colour == PNG_COLOR_TYPE_RGB_ALPHA
+                      ? " (this looks like the colour image: BOP keeps depth in depth/, colour in rgb/)"
+                      : "");
     png_destroy_read_struct(&png, &info, nullptr);
     return false;
   }
@@ -207,6 +212,27 @@ std::vector<std::uint8_t> encode_rgb_png(const RgbImage& image) {
 
 void write_rgb_png(const std::filesystem::path& path, const RgbImage& image) {
   write_file_atomic(path, encode_rgb_png(image));
+}
+
+double median_depth_m(const DepthImage& depth) {
+  std::vector<float> valid;
+  valid.reserve(depth.depth_m.size() / 4);
+  for (const float z : depth.depth_m) {
+    if (std::isfinite(z) && z > 0) valid.push_back(z);
+  }
+  if (valid.empty()) return std::nan("");
+  const auto mid = valid.begin() + static_cast<std::ptrdiff_t>(valid.size() / 2);
+  std::nth_element(valid.begin(), mid, valid.end());
+  return *mid;
+}
+
+std::string depth_scale_warning(const DepthImage& depth, double mm_per_unit) {
+  const double median = median_depth_m(depth);
+  if (!std::isfinite(median) || (median >= 0.3 && median <= 5.0)) return {};
+  const double factor = std::pow(10.0, std::round(std::log10(1.0 / median)));
+  return fmt::format("median depth {:.3g} m at {:g} mm per unit, outside what depth cameras measure (0.3-5 m): is it "
+                     "--depth-scale {:g} (median {:.3g} m)?",
+                     median, mm_per_unit, mm_per_unit * factor, median * factor);
 }
 
 }  // namespace viewpose

@@ -27,12 +27,25 @@ TEST(Units, MismatchWarningNamesTheOtherUnit) {
   EXPECT_NE(unit_mismatch_warning(box_of_size(0.15f), LengthUnit::Millimetres).find("metres"), std::string::npos);
   EXPECT_TRUE(unit_mismatch_warning(box_of_size(0.15f), LengthUnit::Metres).empty());
   EXPECT_TRUE(unit_mismatch_warning(box_of_size(150.0f), LengthUnit::Millimetres).empty());
+  // The warning names the flag that fixes it, and every unit that makes an object of 1 cm to 1.5 m:
+  // 150 units (a bottle in mm) only millimetres; 40 units (a jug in cm, or a 4 cm box in mm) either.
+  EXPECT_NE(unit_mismatch_warning(box_of_size(150.0f), LengthUnit::Metres).find("it looks like millimetres (--unit mm)"),
+            std::string::npos);
+  EXPECT_EQ(unit_mismatch_warning(box_of_size(150.0f), LengthUnit::Metres).find("centimetres"), std::string::npos);
+  EXPECT_NE(unit_mismatch_warning(box_of_size(40.0f), LengthUnit::Metres)
+                .find("it looks like millimetres (--unit mm) or centimetres (--unit cm)"),
+            std::string::npos);
+  EXPECT_NE(unit_mismatch_warning(box_of_size(0.15f), LengthUnit::Millimetres).find("(--unit m)"), std::string::npos);
+  EXPECT_TRUE(unit_mismatch_warning(box_of_size(40.0f), LengthUnit::Centimetres).empty());
 }
 
 TEST(Units, ParseAndScale) {
   EXPECT_EQ(parse_length_unit("mm"), LengthUnit::Millimetres);
   EXPECT_EQ(parse_length_unit("m"), LengthUnit::Metres);
   EXPECT_DOUBLE_EQ(metres_per_unit(LengthUnit::Millimetres), 0.001);
+  EXPECT_EQ(parse_length_unit("cm"), LengthUnit::Centimetres);
+  EXPECT_DOUBLE_EQ(metres_per_unit(LengthUnit::Centimetres), 0.01);
+  EXPECT_EQ(to_string(LengthUnit::Centimetres), "cm");
   test::expect_error([] { parse_length_unit("inch"); }, "inch");
 }
 

@@ -68,6 +68,26 @@ TEST(ViewDatabaseTest, ARenderedViewDescribesToItsEntryAndMatchesItselfFirst) {
   }
 }
 
+TEST(ViewDatabaseTest, AnObjectTheViewCameraCannotSeeWholeOrHardlySeesIsRefusedWithItsUnit) {
+  // A jug read in millimetres as metres is hundreds of metres across; a box in metres read as
+  // millimetres is a tenth of a millimetre. Neither gives a usable view: refused before any work.
+  TriangleMesh huge = make_jug();
+  for (auto& v : huge.vertices) v *= 1000.0f;
+  const ObjectModel big{1, "huge", huge};
+  test::expect_error([&] { build_view_database(std::span(&big, 1), DatabaseParams{}); }, "--unit mm or --unit cm");
+  const ObjectModel tiny{2, "tiny", make_box_mesh({0.0001f, 0.00006f, 0.0002f})};
+  test::expect_error([&] { build_view_database(std::span(&tiny, 1), DatabaseParams{}); }, "--unit m");
+  // Farther away, the camera sees a larger object whole.
+  TriangleMesh wide = make_jug();
+  for (auto& v : wide.vertices) v *= 4.0f;  // 1.4 m across
+  const ObjectModel large{3, "large", wide};
+  DatabaseParams far;
+  far.subdivisions = 0;
+  test::expect_error([&] { build_view_database(std::span(&large, 1), far); }, "larger --distance");
+  far.distance_m = 3.0;
+  EXPECT_EQ(build_view_database(std::span(&large, 1), far).views.size(), 20u);
+}
+
 TEST(ViewDatabaseTest, SurvivesAWriteReadRoundTripBitForBit) {
   const ViewDatabase& db = small_db();
   test::TempDir dir;

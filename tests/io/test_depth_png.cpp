@@ -73,10 +73,25 @@ std::vector<std::uint8_t> make_png(int w, int h, int bit_depth, int colour_type)
   return out;
 }
 
+TEST(DepthPng, AMedianOutsideADepthCamerasRangeNamesTheScaleThatFits) {
+  DepthImage far(40, 30), near(40, 30), fine(40, 30), none(40, 30);
+  for (std::size_t i = 0; i < far.depth_m.size(); ++i) {
+    far.depth_m[i] = 7.0f + 0.002f * static_cast<float>(i);  // a YCB-Video PNG read at 1 mm per unit
+    near.depth_m[i] = 0.06f;                                  // a 1 mm PNG read at 0.1 mm per unit
+    fine.depth_m[i] = i % 3 ? 1.2f : NAN;
+  }
+  EXPECT_NEAR(median_depth_m(far), 7.0 + 0.002 * 600, 0.003);
+  EXPECT_NE(depth_scale_warning(far, 1.0).find("--depth-scale 0.1 (median 0.82"), std::string::npos) << depth_scale_warning(far, 1.0);
+  EXPECT_NE(depth_scale_warning(near, 0.1).find("--depth-scale 1 (median 0.6 m)"), std::string::npos) << depth_scale_warning(near, 0.1);
+  EXPECT_TRUE(depth_scale_warning(fine, 1.0).empty());
+  EXPECT_TRUE(std::isnan(median_depth_m(none)));
+  EXPECT_TRUE(depth_scale_warning(none, 1.0).empty());
+}
+
 TEST(DepthPng, WrongKindsOfPngAreNamed) {
   expect_error([] { decode_depth_png(make_png(4, 4, 8, PNG_COLOR_TYPE_GRAY), "g8.png", 0.001); },
                "g8.png: is a 8-bit greyscale PNG; a depth image must be 16-bit greyscale");
-  expect_error([] { decode_depth_png(make_png(4, 4, 8, PNG_COLOR_TYPE_RGB), "rgb.png", 0.001); }, "8-bit RGB");
+  expect_error([] { decode_depth_png(make_png(4, 4, 8, PNG_COLOR_TYPE_RGB), "rgb.png", 0.001); }, "8-bit RGB PNG; a depth image must be 16-bit greyscale (this looks like the colour image: BOP keeps depth in depth/, colour in rgb/)");
   expect_error([] { decode_depth_png(make_png(4, 4, 16, PNG_COLOR_TYPE_RGB), "rgb16.png", 0.001); }, "16-bit RGB");
   EXPECT_NO_THROW(decode_depth_png(make_png(4, 4, 16, PNG_COLOR_TYPE_GRAY), "ok.png", 0.001));
 }

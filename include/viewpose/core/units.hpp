@@ -1,6 +1,7 @@
 #pragma once
-// Lengths are metres everywhere inside viewpose. Files come in metres (PCD, most OBJ/STL) or
-// millimetres (BOP models, many CAD exports); the unit is converted once, where the file is read.
+// Lengths are metres everywhere inside viewpose. Files come in metres (PCD, most OBJ/STL),
+// millimetres (BOP models, many CAD exports) or centimetres (some modelling tools); the unit is
+// converted once, where the file is read.
 #include <string>
 #include <string_view>
 
@@ -8,12 +9,12 @@
 
 namespace viewpose {
 
-enum class LengthUnit { Metres, Millimetres };
+enum class LengthUnit { Metres, Millimetres, Centimetres };
 
-/// Metres per one unit of the file: 1 or 0.001.
+/// Metres per one unit of the file: 1, 0.001 or 0.01.
 double metres_per_unit(LengthUnit unit);
 std::string_view to_string(LengthUnit unit);
-/// "m" / "mm" (also "metres", "millimetres"); throws viewpose::Error for anything else.
+/// "m" / "mm" / "cm" (also spelt out); throws viewpose::Error for anything else.
 LengthUnit parse_length_unit(std::string_view text);
 
 /// A guess of the unit a box of coordinates was written in. Real objects and depth-camera scenes
@@ -24,8 +25,9 @@ struct UnitGuess {
 };
 UnitGuess guess_length_unit(const BoundingBox& box);
 
-/// A warning when a box said to be in `declared` units looks like the other unit (a bottle 150 m
-/// tall), or an empty string when the size is plausible.
+/// A warning when a box said to be in `declared` units is larger than 10 m or smaller than 1 cm
+/// across (a bottle 150 m tall), naming the units (and their --unit) that would make it an object
+/// of 1 cm to 1.5 m; an empty string when the size is plausible.
 std::string unit_mismatch_warning(const BoundingBox& box, LengthUnit declared);
 
 }  // namespace viewpose

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -17,6 +18,16 @@ inline constexpr int kMaxDepthImageSide = 16384;
 DepthImage read_depth_png(const std::filesystem::path& path, double metres_per_unit);
 /// Decodes PNG bytes; refuses anything but 16-bit greyscale, naming what it found instead.
 DepthImage decode_depth_png(std::span<const std::uint8_t> bytes, std::string_view name, double metres_per_unit);
+
+/// The median of the valid depths (metres); NaN when there is none.
+double median_depth_m(const DepthImage& depth);
+
+/// A structured-light or time-of-flight camera measures about 0.3 to 5 m. When the median valid
+/// depth of an image read at `mm_per_unit` lies outside that, a one-line warning naming the depth
+/// scale (a power of ten times this one) that brings the median nearest 1 m, and what it gives;
+/// empty when the depth is plausible or there is none. A YCB-Video PNG (0.1 mm per unit) read at
+/// 1 mm per unit has its median near 8 m.
+std::string depth_scale_warning(const DepthImage& depth, double mm_per_unit);
 
 /// Writes `depth` rounded to the nearest unit; NaN becomes 0. Throws viewpose::Error when a depth
 /// does not fit in 16 bits at this scale. Atomic.
