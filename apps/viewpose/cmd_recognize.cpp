@@ -31,6 +31,14 @@ namespace viewpose::cli {
 
 namespace {
 
+// A scene or image id from a json file bop wrote, checked before it is narrowed: json's get<int>
+// of 1e60 is a conversion C++ leaves undefined.
+int json_id(const nlohmann::json& x) {
+  const double d = x.get<double>();
+  if (!(d >= 0 && d <= 1e9) || d != std::floor(d)) throw Error(fmt::format("{} is not a scene or image id", x.dump()));
+  return static_cast<int>(d);
+}
+
 struct RecognizeFlags {
   std::string db;
   bool keep_best = false;
@@ -214,7 +222,7 @@ struct BopProgress {
       p.split = j.at("split").get<std::string>();
       p.db = j.at("db").get<std::string>();
       p.targets = j.value("targets", std::string());
-      for (const auto& e : j.at("done")) p.done.insert({e.at(0).get<int>(), e.at(1).get<int>()});
+      for (const auto& e : j.at("done")) p.done.insert({json_id(e.at(0)), json_id(e.at(1))});
     } catch (const nlohmann::json::exception& e) {
       throw Error(fmt::format("{}: not a progress file viewpose bop wrote ({})", path.string(), e.what()));
     }
@@ -353,7 +361,7 @@ void add_bop_command(CLI::App& app, int& exit_code) {
           text = end == std::string_view::npos ? std::string_view{} : text.substr(end + 1);
           try {
             const auto j = nlohmann::json::parse(line);
-            if (progress.done.count({j.at("scene_id").get<int>(), j.at("im_id").get<int>()})) detail_lines.emplace_back(line);
+            if (progress.done.count({json_id(j.at("scene_id")), json_id(j.at("im_id"))})) detail_lines.emplace_back(line);
           } catch (const nlohmann::json::exception&) {
             // A line cut short by the interruption: its image is done again.
           }

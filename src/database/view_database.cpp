@@ -114,14 +114,26 @@ DatabaseParams params_from_json(const std::string& text, const Reader& r) {
   try {
     const auto j = nlohmann::json::parse(text);
     DatabaseParams p;
+    // Every number is read as a double and checked before it is narrowed: json's own get<int> or
+    // get<float> of 5e51 is a conversion C++ leaves undefined (the fuzzer found one).
+    const auto whole = [&](const nlohmann::json& x, int most) {
+      const double d = x.get<double>();
+      if (!(d >= 0 && d <= most) || d != std::floor(d)) r.fail("build parameters are out of range (camera size or view sphere)");
+      return static_cast<int>(d);
+    };
+    const auto length = [&](const nlohmann::json& x) {
+      const double d = x.get<double>();
+      if (!(std::isfinite(d) && d > 0 && d <= 1.0)) r.fail("build parameters are out of range (voxel or normal radius)");
+      return static_cast<float>(d);
+    };
     const auto& c = j.at("camera");
     p.camera = {c.at("fx").get<double>(), c.at("fy").get<double>(), c.at("cx").get<double>(), c.at("cy").get<double>(),
-                c.at("width").get<int>(), c.at("height").get<int>()};
-    p.subdivisions = j.at("subdivisions").get<int>();
+                whole(c.at("width"), 16384), whole(c.at("height"), 16384)};
+    p.subdivisions = whole(j.at("subdivisions"), 6);
     p.distance_m = j.at("distance_m").get<double>();
-    p.voxel_m = j.at("voxel_m").get<float>();
-    p.icp_voxel_m = j.at("icp_voxel_m").get<float>();
-    p.describe.normals.radius_m = j.at("normal_radius_m").get<float>();
+    p.voxel_m = length(j.at("voxel_m"));
+    p.icp_voxel_m = length(j.at("icp_voxel_m"));
+    p.describe.normals.radius_m = length(j.at("normal_radius_m"));
     const auto& v = j.at("vfh");
     p.describe.vfh.normalize_bins = v.at("normalize_bins").get<bool>();
     p.describe.vfh.normalize_distances = v.at("normalize_distances").get<bool>();
