@@ -36,7 +36,7 @@ void print_file_info(const fs::path& path, const FileInfo& info) {
                b.min.x(), b.min.y(), b.min.z(), b.max.x(), b.max.y(), b.max.z(), unit, s.x(), s.y(), s.z());
   }
   if (info.unit_guess) {
-    fmt::print("  units guess:  {} ({})\n", info.unit_guess->unit == LengthUnit::Metres ? "metres" : "millimetres",
+    fmt::print("  units guess:  {} ({})\n", unit_name(info.unit_guess->unit),
                info.unit_guess->reason);
   }
   for (const auto& note : info.notes) fmt::print("  {}\n", note);

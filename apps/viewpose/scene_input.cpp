@@ -32,7 +32,7 @@ Frame load_scene(const std::string& path, const CameraFlags& camera) {
     Frame frame = frame_from_cloud(ext == ".pcd" ? read_pcd(path).cloud : read_ply(path).cloud, K);
     // Clouds carry no unit; PCL's and viewpose's are metres. One in millimetres lies kilometres away.
     const double median = median_depth_m(frame.depth);
-    if (std::isfinite(median) && (median > 5.0 || median < 0.3)) {
+    if (std::isfinite(median) && !within_depth_camera_range(median)) {
       spdlog::warn("{}: median depth {:.3g} m, outside what depth cameras measure (0.3-5 m): clouds are read in metres{}",
                    path, median, median > 100.0 ? "; this one looks like millimetres" : "");
     }

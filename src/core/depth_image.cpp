@@ -1,5 +1,7 @@
 #include "viewpose/core/depth_image.hpp"
 
+#include <algorithm>
+
 #include <cmath>
 #include <limits>
 
@@ -45,6 +47,18 @@ PointCloud depth_to_cloud(const DepthImage& depth, const CameraIntrinsics& K) {
     }
   }
   return cloud;
+}
+
+double median_depth_m(const DepthImage& depth) {
+  std::vector<float> valid;
+  valid.reserve(depth.depth_m.size() / 4);
+  for (const float z : depth.depth_m) {
+    if (std::isfinite(z) && z > 0) valid.push_back(z);
+  }
+  if (valid.empty()) return std::nan("");
+  const auto mid = valid.begin() + static_cast<std::ptrdiff_t>(valid.size() / 2);
+  std::nth_element(valid.begin(), mid, valid.end());
+  return *mid;
 }
 
 }  // namespace viewpose

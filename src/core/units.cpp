@@ -30,6 +30,15 @@ std::string_view to_string(LengthUnit unit) {
   return "m";
 }
 
+std::string_view unit_name(LengthUnit unit) {
+  switch (unit) {
+    case LengthUnit::Millimetres: return "millimetres";
+    case LengthUnit::Centimetres: return "centimetres";
+    case LengthUnit::Metres: break;
+  }
+  return "metres";
+}
+
 LengthUnit parse_length_unit(std::string_view text) {
   if (text == "m" || text == "metres" || text == "meters") return LengthUnit::Metres;
   if (text == "mm" || text == "millimetres" || text == "millimeters") return LengthUnit::Millimetres;
@@ -57,10 +66,9 @@ std::string unit_mismatch_warning(const BoundingBox& box, LengthUnit declared) {
   for (const LengthUnit u : {LengthUnit::Millimetres, LengthUnit::Centimetres, LengthUnit::Metres}) {
     const double m = d * metres_per_unit(u);
     if (u == declared || m < 0.01 || m > 1.5) continue;
-    const std::string_view name = u == LengthUnit::Millimetres ? "millimetres" : u == LengthUnit::Centimetres ? "centimetres" : "metres";
-    likely += fmt::format("{}{} (--unit {})", likely.empty() ? "" : " or ", name, to_string(u));
+    likely += fmt::format("{}{} (--unit {})", likely.empty() ? "" : " or ", unit_name(u), to_string(u));
   }
-  const std::string_view as = declared == LengthUnit::Millimetres ? "millimetres" : declared == LengthUnit::Centimetres ? "centimetres" : "metres";
+  const std::string_view as = unit_name(declared);
   std::string w = across_m > 10.0 ? fmt::format("read as {} the model is {:.4g} m across", as, across_m)
                                    : fmt::format("read as {} the model is {:.3g} mm across", as, across_m * 1000.0);
   if (!likely.empty()) w += fmt::format("; it looks like {}", likely);

@@ -214,21 +214,9 @@ void write_rgb_png(const std::filesystem::path& path, const RgbImage& image) {
   write_file_atomic(path, encode_rgb_png(image));
 }
 
-double median_depth_m(const DepthImage& depth) {
-  std::vector<float> valid;
-  valid.reserve(depth.depth_m.size() / 4);
-  for (const float z : depth.depth_m) {
-    if (std::isfinite(z) && z > 0) valid.push_back(z);
-  }
-  if (valid.empty()) return std::nan("");
-  const auto mid = valid.begin() + static_cast<std::ptrdiff_t>(valid.size() / 2);
-  std::nth_element(valid.begin(), mid, valid.end());
-  return *mid;
-}
-
 std::string depth_scale_warning(const DepthImage& depth, double mm_per_unit) {
   const double median = median_depth_m(depth);
-  if (!std::isfinite(median) || (median >= 0.3 && median <= 5.0)) return {};
+  if (!std::isfinite(median) || within_depth_camera_range(median)) return {};
   const double factor = std::pow(10.0, std::round(std::log10(1.0 / median)));
   return fmt::format("median depth {:.3g} m at {:g} mm per unit, outside what depth cameras measure (0.3-5 m): is it "
                      "--depth-scale {:g} (median {:.3g} m)?",

@@ -24,6 +24,14 @@ struct DepthImage {
   std::size_t count_valid() const;
 };
 
+/// The median of the valid depths (metres); NaN when there is none.
+double median_depth_m(const DepthImage& depth);
+
+/// What structured-light and time-of-flight depth cameras measure, about 0.3 to 5 m: a median
+/// depth outside it says the depth (or cloud) was read in the wrong unit.
+inline constexpr double kDepthCameraNearM = 0.3, kDepthCameraFarM = 5.0;
+inline bool within_depth_camera_range(double z_m) { return z_m >= kDepthCameraNearM && z_m <= kDepthCameraFarM; }
+
 /// The organized cloud (width x height, NaN for missing pixels) that `depth` measures through `K`.
 /// Throws viewpose::Error when the image size and the intrinsics' size disagree.
 PointCloud depth_to_cloud(const DepthImage& depth, const CameraIntrinsics& K);

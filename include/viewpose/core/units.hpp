@@ -14,6 +14,8 @@ enum class LengthUnit { Metres, Millimetres, Centimetres };
 /// Metres per one unit of the file: 1, 0.001 or 0.01.
 double metres_per_unit(LengthUnit unit);
 std::string_view to_string(LengthUnit unit);
+/// "metres", "millimetres", "centimetres": for messages.
+std::string_view unit_name(LengthUnit unit);
 /// "m" / "mm" / "cm" (also spelt out); throws viewpose::Error for anything else.
 LengthUnit parse_length_unit(std::string_view text);
 

@@ -19,9 +19,6 @@ DepthImage read_depth_png(const std::filesystem::path& path, double metres_per_u
 /// Decodes PNG bytes; refuses anything but 16-bit greyscale, naming what it found instead.
 DepthImage decode_depth_png(std::span<const std::uint8_t> bytes, std::string_view name, double metres_per_unit);
 
-/// The median of the valid depths (metres); NaN when there is none.
-double median_depth_m(const DepthImage& depth);
-
 /// A structured-light or time-of-flight camera measures about 0.3 to 5 m. When the median valid
 /// depth of an image read at `mm_per_unit` lies outside that, a one-line warning naming the depth
 /// scale (a power of ten times this one) that brings the median nearest 1 m, and what it gives;
