@@ -15,6 +15,9 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 FUZZ_SECONDS ?= 60
 PCL_FRAMES ?= 12
 BUILD := build
+# The sanitizer and fuzzer builds: clang at -O1 with line tables compiles 4x faster than GCC at
+# -O2 -g under ASan (41 s -> 11 s for recognizer.cpp) and still names file and line in every report.
+SANITIZER_BUILD = -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only"
 # LLVM's OpenMP tool that tells ThreadSanitizer about libomp's barriers and locks (libomp-dev).
 ARCHER = $(firstword $(wildcard /usr/lib/llvm-*/lib/libarcher.so))
 CMAKE_FLAGS ?=
@@ -42,8 +45,9 @@ demo: deps
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
-test-sanitize: deps
-	@cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVIEWPOSE_SANITIZE=ON -DVIEWPOSE_BENCH=OFF >/dev/null
+test-sanitize:
+	@scripts/install-deps.sh build fuzz
+	@CXX=clang++ cmake -S . -B build-sanitize $(SANITIZER_BUILD) -DVIEWPOSE_SANITIZE=ON -DVIEWPOSE_BENCH=OFF >/dev/null
 	@cmake --build build-sanitize -j $(JOBS)
 	@cd build-sanitize && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
 
@@ -51,7 +55,7 @@ test-sanitize: deps
 test-thread:
 	@scripts/install-deps.sh build fuzz
 	@test -n "$(ARCHER)" || { echo "test-thread: libarcher.so (libomp-dev) not found"; exit 1; }
-	@CXX=clang++ cmake -S . -B build-thread -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVIEWPOSE_THREAD_SANITIZE=ON -DVIEWPOSE_BENCH=OFF >/dev/null
+	@CXX=clang++ cmake -S . -B build-thread $(SANITIZER_BUILD) -DVIEWPOSE_THREAD_SANITIZE=ON -DVIEWPOSE_BENCH=OFF >/dev/null
 	@cmake --build build-thread -j $(JOBS)
 	@cd build-thread && OMP_TOOL_LIBRARIES=$(ARCHER) \
 	  TSAN_OPTIONS="suppressions=$(CURDIR)/tests/tsan.supp ignore_noninstrumented_modules=1 halt_on_error=1 second_deadlock_stack=1" \
@@ -59,7 +63,7 @@ test-thread:
 
 fuzz:
 	@scripts/install-deps.sh build fuzz
-	@CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVIEWPOSE_FUZZ=ON >/dev/null
+	@CXX=clang++ cmake -S . -B build-fuzz $(SANITIZER_BUILD) -DVIEWPOSE_FUZZ=ON >/dev/null
 	@cmake --build build-fuzz -j $(JOBS)
 	@scripts/run-fuzzers.sh build-fuzz $(FUZZ_SECONDS)
 
