@@ -8,6 +8,7 @@ build_pkgs=(build-essential cmake pkg-config
             libeigen3-dev libnanoflann-dev libassimp-dev libpng-dev liblzf-dev nlohmann-json3-dev
             libcli11-dev libspdlog-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev
             libmeshoptimizer-dev
+            python3-dev pybind11-dev python3-numpy python3-pytest  # the Python module and its tests
             libfreenect-dev libopenni2-dev)  # camera back-ends of viewpose live (libfreenect ships fakenect)
 fuzz_pkgs=(clang libclang-rt-dev libomp-dev)  # libFuzzer, sanitizer runtimes and OpenMP for clang
 pcl_pkgs=(libpcl-dev)               # only for the optional side-by-side benchmark

@@ -24,7 +24,7 @@
 #include "viewpose/core/threads.hpp"
 #include "viewpose/eval/metrics.hpp"
 #include "viewpose/io/bop.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/recognize/recognizer.hpp"
 #include "viewpose/render/shapes.hpp"
 #include "viewpose/simulate/scaled_database.hpp"

@@ -15,7 +15,7 @@
 #include "viewpose/eval/metrics.hpp"
 #include "viewpose/io/bop.hpp"
 #include "viewpose/io/depth_png.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/io/image_png.hpp"
 #include "viewpose/recognize/recognizer.hpp"
 #include "viewpose/render/shapes.hpp"

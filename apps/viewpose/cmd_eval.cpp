@@ -12,7 +12,7 @@
 #include "viewpose/core/error.hpp"
 #include "viewpose/eval/bop_scores.hpp"
 #include "viewpose/eval/evaluate.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 
 namespace viewpose::cli {
 

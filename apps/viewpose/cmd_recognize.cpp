@@ -19,7 +19,7 @@
 #include "viewpose/core/error.hpp"
 #include "viewpose/io/bop.hpp"
 #include "viewpose/io/bop_results.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/io/image_png.hpp"
 #include "viewpose/io/ply.hpp"
 #include "viewpose/eval/metrics.hpp"

@@ -1,60 +1,15 @@
 #include "model_args.hpp"
 
-#include <algorithm>
-#include <map>
-
-#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "viewpose/core/error.hpp"
-#include "viewpose/io/mesh_loader.hpp"
-#include "viewpose/io/ply.hpp"
-#include "viewpose/render/shapes.hpp"
+#include "viewpose/io/object_models.hpp"
 
 namespace viewpose::cli {
 
-namespace fs = std::filesystem;
-
 std::vector<ObjectModel> load_models(const std::vector<std::string>& models, LengthUnit unit) {
-  std::vector<ObjectModel> out;
-  const auto names = shape_names();
-  for (const std::string& m : models) {
-    ObjectModel o;
-    o.id = static_cast<int>(out.size()) + 1;
-    if (std::find(names.begin(), names.end(), m) != names.end() && !fs::exists(m)) {
-      o.name = m;
-      o.mesh = make_named_shape(m);
-    } else {
-      LoadedMesh loaded = load_mesh(m, unit);
-      for (const auto& w : loaded.warnings) spdlog::warn("{}", w);
-      o.name = fs::path(m).stem().string();
-      o.mesh = std::move(loaded.mesh);
-    }
-    out.push_back(std::move(o));
-  }
-  return out;
-}
-
-std::vector<ObjectModel> load_bop_models(const fs::path& dir) {
-  if (!fs::is_directory(dir)) throw Error(fmt::format("{}: not a folder of BOP models", dir.string()));
-  std::map<int, fs::path> files;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    const std::string stem = e.path().stem().string();
-    if (e.path().extension() != ".ply" || !stem.starts_with("obj_") || stem.size() != 10) continue;
-    if (!std::all_of(stem.begin() + 4, stem.end(), [](char c) { return c >= '0' && c <= '9'; })) continue;
-    files[std::stoi(stem.substr(4))] = e.path();
-  }
-  if (files.empty()) throw Error(fmt::format("{}: no obj_NNNNNN.ply models in it", dir.string()));
-  std::vector<ObjectModel> out;
-  for (const auto& [id, path] : files) {
-    PlyFile ply = read_ply(path);
-    if (!ply.has_faces()) throw Error(fmt::format("{}: a point cloud, not a mesh", path.string()));
-    ObjectModel o{id, path.stem().string(), std::move(ply.mesh)};
-    for (auto& v : o.mesh.vertices) v *= 0.001f;  // BOP models are in millimetres
-    o.mesh.normals.clear();
-    out.push_back(std::move(o));
-  }
-  return out;
+  LoadedObjectModels loaded = load_object_models(models, unit);
+  for (const std::string& w : loaded.warnings) spdlog::warn("{}", w);
+  return std::move(loaded.objects);
 }
 
 }  // namespace viewpose::cli

@@ -43,7 +43,7 @@
 #include <nlohmann/json.hpp>
 
 #include "viewpose/database/matching.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/recognize/recognizer.hpp"
 #include "viewpose/render/shapes.hpp"
 #include "viewpose/segment/voxel_grid.hpp"

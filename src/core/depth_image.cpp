@@ -49,6 +49,20 @@ PointCloud depth_to_cloud(const DepthImage& depth, const CameraIntrinsics& K) {
   return cloud;
 }
 
+DepthImage depth_from_units(std::span<const std::uint16_t> units, int width, int height, double metres_per_unit) {
+  if (!(std::isfinite(metres_per_unit) && metres_per_unit > 0 && metres_per_unit < 1)) {
+    throw Error(fmt::format("depth scale {} m per unit is not a positive fraction of a metre", metres_per_unit));
+  }
+  if (width <= 0 || height <= 0 || units.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
+    throw Error(fmt::format("depth: {} values are not an image of {} x {}", units.size(), width, height));
+  }
+  DepthImage depth(width, height);
+  for (std::size_t i = 0; i < units.size(); ++i) {
+    if (units[i] != 0) depth.depth_m[i] = static_cast<float>(units[i] * metres_per_unit);
+  }
+  return depth;
+}
+
 double median_depth_m(const DepthImage& depth) {
   std::vector<float> valid;
   valid.reserve(depth.depth_m.size() / 4);

@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "viewpose/core/error.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/render/rasterizer.hpp"
 #include "viewpose/render/view_sphere.hpp"
 #include "viewpose/segment/voxel_grid.hpp"

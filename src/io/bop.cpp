@@ -11,7 +11,7 @@
 
 #include "viewpose/core/error.hpp"
 #include "viewpose/io/depth_png.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 
 namespace viewpose {
 

@@ -6,7 +6,7 @@
 
 #include "text.hpp"
 #include "viewpose/core/error.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 
 namespace viewpose {
 

@@ -13,7 +13,7 @@
 #include "viewpose/io/bop.hpp"
 #include "viewpose/io/bop_results.hpp"
 #include "viewpose/io/depth_png.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/io/mesh_loader.hpp"
 #include "viewpose/io/pcd.hpp"
 #include "viewpose/io/ply.hpp"

@@ -15,7 +15,7 @@
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 
 namespace viewpose {
 
@@ -142,8 +142,7 @@ void check_scale(double metres_per_unit, std::string_view name) {
 
 }  // namespace
 
-DepthImage decode_depth_png(std::span<const std::uint8_t> bytes, std::string_view name, double metres_per_unit) {
-  check_scale(metres_per_unit, name);
+DepthPngUnits decode_depth_png_units(std::span<const std::uint8_t> bytes, std::string_view name) {
   if (bytes.empty()) throw Error(fmt::format("{}: empty file", name));
   if (bytes.size() < 8 || png_sig_cmp(bytes.data(), 0, 8) != 0) throw Error(fmt::format("{}: not a PNG file", name));
   PngIo io;
@@ -153,15 +152,21 @@ DepthImage decode_depth_png(std::span<const std::uint8_t> bytes, std::string_vie
   std::vector<png_bytep> rows;
   int width = 0, height = 0;
   if (!decode(io, pixels, rows, width, height)) throw Error(fmt::format("{}: {}", name, io.message));
-  DepthImage depth(width, height);
-  for (std::size_t i = 0; i < pixels.size(); ++i) {
-    if (pixels[i] != 0) depth.depth_m[i] = static_cast<float>(pixels[i] * metres_per_unit);
-  }
-  return depth;
+  return DepthPngUnits{width, height, std::move(pixels)};
+}
+
+DepthImage decode_depth_png(std::span<const std::uint8_t> bytes, std::string_view name, double metres_per_unit) {
+  check_scale(metres_per_unit, name);
+  const DepthPngUnits png = decode_depth_png_units(bytes, name);
+  return depth_from_units(png.units, png.width, png.height, metres_per_unit);
 }
 
 DepthImage read_depth_png(const std::filesystem::path& path, double metres_per_unit) {
   return decode_depth_png(read_file_bytes(path), path.string(), metres_per_unit);
+}
+
+DepthPngUnits read_depth_png_units(const std::filesystem::path& path) {
+  return decode_depth_png_units(read_file_bytes(path), path.string());
 }
 
 std::vector<std::uint8_t> encode_depth_png(const DepthImage& depth, double metres_per_unit) {

@@ -16,7 +16,19 @@
 
 namespace viewpose {
 
-Recognizer::Recognizer(const ViewDatabase& db, RecognizerOptions options) : db_(db), options_(std::move(options)), index_(db) {
+Recognizer::Recognizer(const ViewDatabase& db, RecognizerOptions options)
+    // Not owned: a shared_ptr that points at the caller's database and owns nothing.
+    : Recognizer(std::shared_ptr<const ViewDatabase>(std::shared_ptr<void>(), &db), std::move(options)) {}
+
+Recognizer::Recognizer(ViewDatabase&& db, RecognizerOptions options)
+    : Recognizer(std::make_shared<const ViewDatabase>(std::move(db)), std::move(options)) {}
+
+Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOptions options)
+    : db_owner_(shared ? std::move(shared) : throw Error("recognize: no view database given")),
+      db_(*db_owner_),
+      options_(std::move(options)),
+      index_(db_) {
+  const ViewDatabase& db = db_;
   if (db.views.empty()) throw Error("recognize: the view database holds no views");
   for (const DatabaseObject& o : db.objects) {
     prepared_.push_back(std::make_unique<PreparedObject>());

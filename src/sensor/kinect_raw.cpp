@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 
 namespace viewpose {
 

@@ -6,7 +6,7 @@
 
 #include "viewpose/core/error.hpp"
 #include "viewpose/io/depth_png.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/io/ply.hpp"
 
 namespace viewpose {

@@ -6,7 +6,7 @@
 #include "viewpose/core/error.hpp"
 #include "viewpose/database/matching.hpp"
 #include "viewpose/database/view_database.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/render/rasterizer.hpp"
 #include "viewpose/render/shapes.hpp"
 #include "viewpose/simulate/scaled_database.hpp"

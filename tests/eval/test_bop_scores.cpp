@@ -10,7 +10,7 @@
 #include "viewpose/eval/bop_scores.hpp"
 #include "viewpose/eval/metrics.hpp"
 #include "viewpose/io/depth_png.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/render/rasterizer.hpp"
 #include "viewpose/render/shapes.hpp"
 

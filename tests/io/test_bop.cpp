@@ -8,7 +8,7 @@
 #include "viewpose/io/bop.hpp"
 #include "viewpose/io/bop_results.hpp"
 #include "viewpose/io/depth_png.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/io/inspect.hpp"
 
 namespace viewpose {

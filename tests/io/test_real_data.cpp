@@ -7,7 +7,7 @@
 #include "test_support.hpp"
 #include "viewpose/io/bop.hpp"
 #include "viewpose/io/depth_png.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/io/mesh_loader.hpp"
 #include "viewpose/io/pcd.hpp"
 #include "viewpose/io/ply.hpp"

@@ -7,6 +7,7 @@
 
 #include "test_support.hpp"
 #include "viewpose/eval/metrics.hpp"
+#include "viewpose/core/error.hpp"
 #include "viewpose/core/kdtree.hpp"
 #include "viewpose/core/threads.hpp"
 #include "viewpose/io/bop.hpp"
@@ -53,6 +54,33 @@ TEST(Recognize, NoiseFreeJugAtOneMetreWithinFiveMillimetresAndTwoDegrees) {
     EXPECT_LT(rotation_difference_deg(d.T_camera_object.linear(), f.gt[0].T_camera_object.linear()), 2.0);
     EXPECT_GT(d.score, 0.9);
   }
+}
+
+TEST(Recognize, ARecognizerKeepsTheDatabaseItIsGivenOrShares) {
+  // `Recognizer r(ViewDatabase::load(path))` once kept a reference to the temporary: the database it
+  // is handed (moved in, or shared) must live as long as the recognizer, and give the same answer.
+  SeedExperimentOptions setup;
+  setup.distances_m = {1.0};
+  setup.orientations = 1;
+  const SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, setup, 21);
+  const Frame frame = frame_from_depth(simulate_image(ds, ds.scenes[0].images[0], SensorModel::ideal(), 1).depth, K);
+  const Recognition borrowed = Recognizer(jug_db()).recognize(frame);
+  ASSERT_EQ(borrowed.detections.size(), 1u);
+
+  const test::TempDir dir;
+  jug_db().save(dir / "jug.vpdb");
+  const Recognizer owning(ViewDatabase::load(dir / "jug.vpdb"));
+  EXPECT_NE(&owning.database(), &jug_db());
+  auto shared = std::make_shared<const ViewDatabase>(ViewDatabase::load(dir / "jug.vpdb"));
+  const Recognizer sharing(shared);
+  shared.reset();  // the recognizer's copy of the pointer keeps it
+  for (const Recognizer* r : {&owning, &sharing}) {
+    const Recognition again = r->recognize(frame);
+    ASSERT_EQ(again.detections.size(), 1u);
+    EXPECT_TRUE(again.detections[0].T_camera_object.isApprox(borrowed.detections[0].T_camera_object, 1e-9));
+    EXPECT_EQ(again.detections[0].score, borrowed.detections[0].score);
+  }
+  EXPECT_THROW(Recognizer(std::shared_ptr<const ViewDatabase>()), Error);
 }
 
 TEST(Recognize, ADeadlineCutsTheFrameShortAndSaysSo) {

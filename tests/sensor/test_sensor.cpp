@@ -8,7 +8,7 @@
 
 #include "test_support.hpp"
 #include "viewpose/core/error.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/sensor/depth_source.hpp"
 #include "viewpose/sensor/kinect_raw.hpp"
 #include "viewpose/sensor/latest_frame.hpp"

@@ -2,6 +2,8 @@
 // A depth image in metres: depth along the camera's z axis (not the ray length), row-major, NaN where
 // the sensor measured nothing.
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <vector>
 
 #include "viewpose/core/camera.hpp"
@@ -23,6 +25,11 @@ struct DepthImage {
   /// Pixels with a finite depth greater than zero.
   std::size_t count_valid() const;
 };
+
+/// Depth from a camera driver's integer units (row-major, 0 = no measurement): unit v is
+/// v * metres_per_unit metres (an Xtion or Kinect in millimetres: 0.001). Throws viewpose::Error when
+/// the buffer is not width x height or the scale is not a positive fraction of a metre.
+DepthImage depth_from_units(std::span<const std::uint16_t> units, int width, int height, double metres_per_unit);
 
 /// The median of the valid depths (metres); NaN when there is none.
 double median_depth_m(const DepthImage& depth);

@@ -16,6 +16,16 @@ namespace viewpose {
 inline constexpr int kMaxDepthImageSide = 16384;
 
 DepthImage read_depth_png(const std::filesystem::path& path, double metres_per_unit);
+
+/// The stored values as they are, in the file's units (0 = no measurement): depth_from_units()
+/// (core/depth_image.hpp) turns them into metres exactly as read_depth_png does.
+struct DepthPngUnits {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint16_t> units;  ///< row-major
+};
+DepthPngUnits read_depth_png_units(const std::filesystem::path& path);
+DepthPngUnits decode_depth_png_units(std::span<const std::uint8_t> bytes, std::string_view name);
 /// Decodes PNG bytes; refuses anything but 16-bit greyscale, naming what it found instead.
 DepthImage decode_depth_png(std::span<const std::uint8_t> bytes, std::string_view name, double metres_per_unit);
 

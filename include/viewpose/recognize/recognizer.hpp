@@ -156,8 +156,14 @@ struct Recognition {
 
 class Recognizer {
  public:
+  /// Shares the database: it lives as long as the last recognizer (or caller) holding it.
+  explicit Recognizer(std::shared_ptr<const ViewDatabase> db, RecognizerOptions options = {});
+  /// Takes the database: `Recognizer r(ViewDatabase::load(path));` keeps what it loaded.
+  explicit Recognizer(ViewDatabase&& db, RecognizerOptions options = {});
+  /// Uses a database the caller keeps alive for as long as the recognizer (no copy is made).
   explicit Recognizer(const ViewDatabase& db, RecognizerOptions options = {});
   ~Recognizer();
+  const ViewDatabase& database() const { return db_; }
   Recognition recognize(const Frame& frame) const;
   const RecognizerOptions& options() const { return options_; }
 
@@ -173,6 +179,7 @@ class Recognizer {
   // Which of `points` (camera frame) lie on the detected model's surface, within the verification tolerance.
   std::vector<char> explained_points(const Detection& detection, const PointCloud& points) const;
 
+  std::shared_ptr<const ViewDatabase> db_owner_;  // empty-owned when the caller keeps the database
   const ViewDatabase& db_;
   RecognizerOptions options_;
   // One initial pose refined by ICP and, unless ICP lost the object, verified.

@@ -8,7 +8,7 @@
 
 #include "test_support.hpp"
 #include "viewpose/core/error.hpp"
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 
 namespace viewpose {
 namespace {

@@ -1,4 +1,4 @@
-#include "viewpose/io/file.hpp"
+#include "viewpose/core/file.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
