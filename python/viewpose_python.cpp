@@ -19,6 +19,7 @@
 #include "viewpose/database/view_database.hpp"
 #include "viewpose/io/depth_png.hpp"
 #include "viewpose/io/object_models.hpp"
+#include "viewpose/io/recognition_json.hpp"
 #include "viewpose/recognize/frame.hpp"
 #include "viewpose/recognize/recognizer.hpp"
 
@@ -169,6 +170,8 @@ PYBIND11_MODULE(viewpose, m) {
                                d["verify"] = t.verify_ms, d["split"] = t.split_ms, d["total"] = t.total_ms;
                                return d;
                              })
+      .def("to_json", [](const Recognition& r, bool with_times) { return recognition_json(r, with_times).dump(); },
+           py::kw_only(), py::arg("with_times") = true, "The JSON text `viewpose recognize --json` writes (without its scene key)")
       .def("__len__", [](const Recognition& r) { return r.detections.size(); })
       .def("__getitem__",
            [](const Recognition& r, std::size_t i) {
@@ -182,15 +185,15 @@ PYBIND11_MODULE(viewpose, m) {
       .def(py::init([](std::shared_ptr<ViewDatabase> db, bool keep_best, bool split_touching, std::size_t matches,
                        double deadline_ms, std::optional<double> min_score) {
              RecognizerOptions o;
-             o.keep_best = keep_best;
-             o.split_touching = split_touching;
-             o.matches = matches;
-             o.deadline_ms = deadline_ms;
-             if (min_score) o.min_confidence = *min_score;
+             o.accept.keep_best = keep_best;
+             o.split.enabled = split_touching;
+             o.match.per_object = matches;
+             o.run.deadline_ms = deadline_ms;
+             if (min_score) o.accept.min_confidence = *min_score;
              return std::make_unique<Recognizer>(std::shared_ptr<const ViewDatabase>(std::move(db)), o);
            }),
            py::arg("db"), py::kw_only(), py::arg("keep_best") = false, py::arg("split_touching") = true,
-           py::arg("matches") = RecognizerOptions{}.matches, py::arg("deadline_ms") = 0.0, py::arg("min_score") = py::none(),
+           py::arg("matches") = RecognizerOptions{}.match.per_object, py::arg("deadline_ms") = 0.0, py::arg("min_score") = py::none(),
            "Options as `viewpose recognize` has them: keep_best, split_touching (--no-split is False), matches, "
            "deadline_ms (0: none), min_score (None: the default threshold)")
       .def(

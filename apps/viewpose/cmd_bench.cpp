@@ -153,8 +153,8 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       db = scaled_database(db, static_cast<std::size_t>(o->objects), 11);
     }
     RecognizerOptions options;
-    options.split_touching = !o->no_split;
-    options.deadline_ms = o->deadline_ms;
+    options.split.enabled = !o->no_split;
+    options.run.deadline_ms = o->deadline_ms;
     const auto t_prepare = Clock::now();
     const Recognizer recognizer(db, options);
     const double prepare_ms = ms_since(t_prepare);

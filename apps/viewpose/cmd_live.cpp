@@ -17,6 +17,7 @@
 #include "commands.hpp"
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/stopwatch.hpp"
+#include "viewpose/io/recognition_json.hpp"
 #include "viewpose/recognize/frame.hpp"
 #include "viewpose/sensor/depth_source.hpp"
 #include "viewpose/sensor/latest_frame.hpp"
@@ -90,9 +91,9 @@ void add_live_command(CLI::App& app, int& exit_code) {
     } restore_signals;
     const ViewDatabase db = ViewDatabase::load(o->db);
     RecognizerOptions options;
-    options.split_touching = !o->no_split;
-    options.deadline_ms = o->deadline_ms;
-    if (o->min_score >= 0) options.min_confidence = o->min_score;
+    options.split.enabled = !o->no_split;
+    options.run.deadline_ms = o->deadline_ms;
+    if (o->min_score >= 0) options.accept.min_confidence = o->min_score;
     const Recognizer recognizer(db, options);
     const std::unique_ptr<DepthSource> source = open_depth_source(o->source);
     CameraIntrinsics K = source->intrinsics();

@@ -22,6 +22,7 @@
 #include "viewpose/core/file.hpp"
 #include "viewpose/io/image_png.hpp"
 #include "viewpose/io/ply.hpp"
+#include "viewpose/io/recognition_json.hpp"
 #include "viewpose/eval/metrics.hpp"
 #include "viewpose/pose/confidence.hpp"
 #include "viewpose/recognize/recognizer.hpp"
@@ -67,11 +68,11 @@ struct RecognizeFlags {
   }
   RecognizerOptions options() const {
     RecognizerOptions o;
-    o.keep_best = keep_best;
-    o.split_touching = !no_split;
-    o.matches = matches;
-    o.deadline_ms = deadline_ms;
-    if (min_score >= 0) o.min_confidence = min_score;
+    o.accept.keep_best = keep_best;
+    o.split.enabled = !no_split;
+    o.match.per_object = matches;
+    o.run.deadline_ms = deadline_ms;
+    if (min_score >= 0) o.accept.min_confidence = min_score;
     return o;
   }
 };
@@ -84,46 +85,6 @@ Eigen::Vector3d yaw_pitch_roll_deg(const Eigen::Matrix3d& R) {
 }
 
 }  // namespace
-
-nlohmann::json recognition_json(const Recognition& r, bool with_times) {
-  nlohmann::json dets = nlohmann::json::array();
-  for (const Detection& d : r.detections) {
-    const Eigen::Matrix3d R = d.T_camera_object.linear();
-    const Eigen::Vector3d t = d.T_camera_object.translation();
-    dets.push_back({{"object_id", d.object_id}, {"object_name", d.object_name},
-                    {"R", {R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2)}},
-                    {"t_m", {t.x(), t.y(), t.z()}}, {"score", d.score}, {"icp_fitness", d.icp_fitness},
-                    {"icp_rmse_m", d.icp_rmse_m}, {"match_rank", d.match_rank}, {"roll_deg", d.roll_deg},
-                    {"cluster_points", d.cluster_points}, {"from_split_cluster", d.from_split_cluster},
-                    {"runner_up_score", d.runner_up_score},
-                    {"verification", {{"fit_score", d.verification.score},
-                                      {"inlier_fraction", d.verification.inlier_fraction},
-                                      {"conflict_fraction", d.verification.conflict_fraction},
-                                      {"cluster_explained", d.verification.cluster_explained},
-                                      {"model_support", d.verification.model_support},
-                                      {"visible_fraction", d.verification.visible_fraction},
-                                      {"unmeasured_fraction", d.verification.unmeasured_fraction},
-                                      {"mean_depth_m", d.verification.mean_depth_m},
-                                      {"outline_continuation", d.verification.outline_continuation},
-                                      {"outline", {{"continued", d.verification.outline_continued},
-                                                   {"stepped", d.verification.outline_stepped},
-                                                   {"in_front", d.verification.outline_in_front},
-                                                   {"unknown", d.verification.outline_unknown}}},
-                                      {"model_rms_m", d.verification.model_rms_m},
-                                      {"plane_rms_m", d.verification.plane_rms_m},
-                                      {"model_relief_m", d.verification.model_relief_m}}}});
-  }
-  nlohmann::json j = {{"detections", dets}, {"cut_short", r.cut_short}, {"clusters", r.clusters},
-                      {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses},
-                      {"dropped_as_explained", r.dropped_as_explained}};
-  if (with_times) {
-    const StageTimes& t = r.times;
-    j["times_ms"] = {{"downsample", t.downsample_ms}, {"segment", t.segment_ms}, {"normals", t.normals_ms},
-                     {"vfh", t.vfh_ms}, {"match", t.match_ms}, {"crh", t.crh_ms}, {"icp", t.icp_ms},
-                     {"verify", t.verify_ms}, {"split", t.split_ms}, {"total", t.total_ms}};
-  }
-  return j;
-}
 
 void print_recognition(const Recognition& r) {
   if (r.detections.empty()) fmt::print("no known object found ({} clusters, {} poses tried)\n", r.clusters, r.hypotheses);
@@ -275,6 +236,78 @@ std::string hypotheses_json(const std::vector<VerifiedHypothesis>& heard, const 
 
 }  // namespace
 
+namespace {
+
+// Per image (scene_id, im_id), the objects to report and at most how many of each.
+using WantedObjects = std::map<std::pair<int, int>, std::map<int, int>>;
+
+// The BOP19 task: only the images the targets file lists stay in `ds`; each with its objects.
+WantedObjects restrict_to_targets(BopDataset& ds, const std::string& targets) {
+  WantedObjects wanted;
+  for (const BopTarget& t : read_bop_targets(targets)) wanted[{t.scene_id, t.im_id}][t.obj_id] = t.inst_count;
+  std::set<std::pair<int, int>> in_split;
+  for (const BopImage& im : ds.images) in_split.insert({im.scene_id, im.im_id});
+  for (const auto& [image, objects] : wanted) {
+    if (!in_split.count(image)) {
+      throw Error(fmt::format("{}: lists scene {} image {}, which split '{}' does not have", targets, image.first,
+                              image.second, ds.split));
+    }
+  }
+  std::erase_if(ds.images, [&](const BopImage& im) { return !wanted.count({im.scene_id, im.im_id}); });
+  return wanted;
+}
+
+// --resume: the images an earlier run of the same inputs finished, with their rows and detail
+// lines; a progress file of other inputs is an error, none means starting afresh.
+void resume_run(const std::filesystem::path& progress_path, const std::string& out, const std::string& details,
+                std::size_t images, BopProgress& progress, std::vector<BopResult>& results,
+                std::vector<std::string>& detail_lines) {
+  if (!std::filesystem::exists(progress_path)) {
+    fmt::print(stderr, "bop: nothing to resume ({} is absent): starting afresh\n", progress_path.string());
+    return;
+  }
+  const BopProgress before = BopProgress::read(progress_path);
+  if (before.dataset != progress.dataset || before.split != progress.split || before.db != progress.db ||
+      before.targets != progress.targets) {
+    throw Error(fmt::format("{}: written for {} ({}) with {}{}, not this run's; start afresh without --resume",
+                            progress_path.string(), before.dataset, before.split, before.db,
+                            before.targets.empty() ? std::string() : " and targets " + before.targets));
+  }
+  progress.done = before.done;
+  // Rows and detail lines of images the progress file vouches for; any other is done again.
+  if (std::filesystem::exists(out)) {
+    for (const BopResult& r : read_bop_results(out))
+      if (progress.done.count({r.scene_id, r.im_id})) results.push_back(r);
+  }
+  if (!details.empty() && std::filesystem::exists(details)) {
+    const auto bytes = read_file_bytes(details);
+    std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    while (!text.empty()) {
+      const std::size_t end = text.find('\n');
+      const std::string_view line = text.substr(0, end);
+      text = end == std::string_view::npos ? std::string_view{} : text.substr(end + 1);
+      try {
+        const auto j = nlohmann::json::parse(line);
+        if (progress.done.count({json_id(j.at("scene_id")), json_id(j.at("im_id"))})) detail_lines.emplace_back(line);
+      } catch (const nlohmann::json::exception&) {
+        // A line cut short by the interruption: its image is done again.
+      }
+    }
+  }
+  fmt::print(stderr, "bop: resuming: {} of {} images already done\n", progress.done.size(), images);
+}
+
+// One --details line: the image's recognition and, unless `seconds` < 0 (--no-times), its time.
+std::string detail_line(const Recognition& r, const BopImage& im, double seconds) {
+  nlohmann::json line = recognition_json(r, seconds >= 0);
+  line["scene_id"] = im.scene_id;
+  line["im_id"] = im.im_id;
+  if (seconds >= 0) line["seconds"] = seconds;
+  return line.dump();
+}
+
+}  // namespace
+
 void add_bop_command(CLI::App& app, int& exit_code) {
   struct Options {
     RecognizeFlags flags;
@@ -310,25 +343,13 @@ void add_bop_command(CLI::App& app, int& exit_code) {
     BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
     for (const auto& note : ds.notes) fmt::print(stderr, "viewpose: note: {}\n", note);
     // The BOP19 task: per image, the objects to find and how many of each.
-    std::map<std::pair<int, int>, std::map<int, int>> wanted;
-    if (!o->targets.empty()) {
-      for (const BopTarget& t : read_bop_targets(o->targets)) wanted[{t.scene_id, t.im_id}][t.obj_id] = t.inst_count;
-      std::set<std::pair<int, int>> in_split;
-      for (const BopImage& im : ds.images) in_split.insert({im.scene_id, im.im_id});
-      for (const auto& [image, objects] : wanted) {
-        if (!in_split.count(image)) {
-          throw Error(fmt::format("{}: lists scene {} image {}, which split '{}' does not have", o->targets, image.first,
-                                  image.second, ds.split));
-        }
-      }
-      std::erase_if(ds.images, [&](const BopImage& im) { return !wanted.count({im.scene_id, im.im_id}); });
-    }
+    const WantedObjects wanted = o->targets.empty() ? WantedObjects{} : restrict_to_targets(ds, o->targets);
     // Every pose that passes verification's bounds, heard of while an image is recognized.
     std::vector<VerifiedHypothesis> heard;
     RecognizerOptions options = o->flags.options();
     if (!o->hypotheses.empty()) {
       if (o->resume) throw Error("bop: --hypotheses cannot be resumed; run it afresh");
-      options.on_verified = [&heard](const VerifiedHypothesis& h) { heard.push_back(h); };
+      options.accept.on_verified = [&heard](const VerifiedHypothesis& h) { heard.push_back(h); };
     }
     std::string hypothesis_lines;
     const Recognizer recognizer(db, options);
@@ -338,39 +359,7 @@ void add_bop_command(CLI::App& app, int& exit_code) {
                          o->targets.empty() ? std::string() : std::filesystem::absolute(o->targets).lexically_normal().string(), {}};
     std::vector<BopResult> results;
     std::vector<std::string> detail_lines;
-    if (o->resume && std::filesystem::exists(progress_path)) {
-      const BopProgress before = BopProgress::read(progress_path);
-      if (before.dataset != progress.dataset || before.split != progress.split || before.db != progress.db ||
-          before.targets != progress.targets) {
-        throw Error(fmt::format("{}: written for {} ({}) with {}{}, not this run's; start afresh without --resume",
-                                progress_path.string(), before.dataset, before.split, before.db,
-                                before.targets.empty() ? std::string() : " and targets " + before.targets));
-      }
-      progress.done = before.done;
-      // Rows and detail lines of images the progress file vouches for; any other is done again.
-      if (std::filesystem::exists(o->out)) {
-        for (const BopResult& r : read_bop_results(o->out))
-          if (progress.done.count({r.scene_id, r.im_id})) results.push_back(r);
-      }
-      if (!o->details.empty() && std::filesystem::exists(o->details)) {
-        const auto bytes = read_file_bytes(o->details);
-        std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-        while (!text.empty()) {
-          const std::size_t end = text.find('\n');
-          const std::string_view line = text.substr(0, end);
-          text = end == std::string_view::npos ? std::string_view{} : text.substr(end + 1);
-          try {
-            const auto j = nlohmann::json::parse(line);
-            if (progress.done.count({json_id(j.at("scene_id")), json_id(j.at("im_id"))})) detail_lines.emplace_back(line);
-          } catch (const nlohmann::json::exception&) {
-            // A line cut short by the interruption: its image is done again.
-          }
-        }
-      }
-      fmt::print(stderr, "bop: resuming: {} of {} images already done\n", progress.done.size(), ds.images.size());
-    } else if (o->resume) {
-      fmt::print(stderr, "bop: nothing to resume ({} is absent): starting afresh\n", progress_path.string());
-    }
+    if (o->resume) resume_run(progress_path, o->out, o->details, ds.images.size(), progress, results, detail_lines);
     const auto checkpoint = [&] {
       // Results first, then the list that vouches for them.
       write_bop_results(o->out, results);
@@ -403,13 +392,7 @@ void add_bop_command(CLI::App& app, int& exit_code) {
           results.push_back({im.scene_id, im.im_id, d.object_id, d.score, d.T_camera_object, o->flags.no_times ? -1.0 : seconds});
           ++detections;
         }
-        if (!o->details.empty()) {
-          nlohmann::json line = recognition_json(r, !o->flags.no_times);
-          line["scene_id"] = im.scene_id;
-          line["im_id"] = im.im_id;
-          if (!o->flags.no_times) line["seconds"] = seconds;
-          detail_lines.push_back(line.dump());
-        }
+        if (!o->details.empty()) detail_lines.push_back(detail_line(r, im, o->flags.no_times ? -1.0 : seconds));
         progress.done.insert({im.scene_id, im.im_id});
         // A checkpoint every two seconds: an interruption loses at most that much work.
         if (std::chrono::steady_clock::now() - last_checkpoint > std::chrono::seconds(2)) {

@@ -4,7 +4,6 @@
 #include <filesystem>
 
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 
 #include "viewpose/io/inspect.hpp"
 #include "viewpose/recognize/recognizer.hpp"
@@ -21,9 +20,6 @@ void add_recognize_command(CLI::App& app, int& exit_code);
 void add_bop_command(CLI::App& app, int& exit_code);
 void add_live_command(CLI::App& app, int& exit_code);
 
-/// Detections (pose, score, verification) and, `with_times`, per-stage times (ms), as `recognize --json`
-/// writes them.
-nlohmann::json recognition_json(const Recognition& r, bool with_times = true);
 /// The detections and times in words, as `viewpose recognize` prints them.
 void print_recognition(const Recognition& r);
 

@@ -51,6 +51,9 @@ def test_a_frame_gives_exactly_what_the_command_gives(scene):
         expected = json.loads(out.read_text())["detections"]
         got = rec.recognize(viewpose.read_depth_png(png), K=scene["K"], depth_scale=scene["scale"])
         assert len(got) == len(expected), png
+        everything = json.loads(out.read_text())
+        del everything["scene"]
+        assert json.loads(got.to_json(with_times=False)) == everything
         for d, e in zip(got, expected):
             assert d.object_id == e["object_id"] and d.object_name == e["object_name"]
             assert d.score == e["score"]

@@ -48,112 +48,126 @@ struct PlaneSums {
 
 }  // namespace
 
-Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_object, const DepthImage& observed,
-                         const CameraIntrinsics& K, std::span<const Eigen::Vector3f> cluster_points,
-                         const VerifyOptions& o) {
-  Verification v;
-  const int W = K.width, H = K.height, m = std::max(0, o.edge_margin_px);
-  // The model is drawn into the window its bounding box projects to, plus a margin for the edge
-  // test, which may reach up to `border` pixels beyond the image on every side: whatever of the
-  // model falls outside the image counts as unseen rather than not existing. Pixels outside the
-  // window hold no model and need no look.
-  constexpr int border = 64;
-  int u0 = -border, v0 = -border, u1 = W + border, v1 = H + border;  // window [u0, u1) x [v0, v1)
-  {
-    // (No copy of a scanned model's points for it: this runs once per hypothesis.)
-    const BoundingBox box =
-        shape.mesh && !shape.mesh->triangles.empty() ? bounding_box(*shape.mesh) : bounding_box(shape.points);
-    double lo_u = 1e9, lo_v = 1e9, hi_u = -1e9, hi_v = -1e9;
-    bool in_front = !box.empty;
-    for (int corner = 0; corner < 8 && in_front; ++corner) {
-      const Eigen::Vector3d p(corner & 1 ? box.max.x() : box.min.x(), corner & 2 ? box.max.y() : box.min.y(),
-                              corner & 4 ? box.max.z() : box.min.z());
-      const Eigen::Vector3d c = T_camera_object * p;
-      in_front = c.z() > 1e-6;
-      const Eigen::Vector2d uv = K.project(c);
-      lo_u = std::min(lo_u, uv.x()), hi_u = std::max(hi_u, uv.x());
-      lo_v = std::min(lo_v, uv.y()), hi_v = std::max(hi_v, uv.y());
-    }
-    // A box reaching behind the camera projects to no window: draw the whole frame.
-    if (in_front) {
-      const int pad = m + 2;
-      u0 = std::clamp(static_cast<int>(std::floor(lo_u)) - pad, -border, W + border);
-      v0 = std::clamp(static_cast<int>(std::floor(lo_v)) - pad, -border, H + border);
-      u1 = std::clamp(static_cast<int>(std::ceil(hi_u)) + pad + 1, u0, W + border);
-      v1 = std::clamp(static_cast<int>(std::ceil(hi_v)) + pad + 1, v0, H + border);
-    }
+namespace {
+
+// The pixels the model is judged on: the window [u0, u1) x [v0, v1) its bounding box projects to,
+// plus a margin for the edge test, which may reach up to `kBorder` pixels beyond the image on every
+// side (whatever of the model falls outside the image counts as unseen rather than not existing;
+// pixels outside the window hold no model and need no look), sampled every `step` pixels.
+struct JudgedWindow {
+  static constexpr int kBorder = 64;
+  int u0 = 0, v0 = 0, u1 = 0, v1 = 0;
+  int step = 1;
+  CameraIntrinsics Kx;  // the camera on the samples: sample (xs, ys) is pixel (u0 + s xs, v0 + s ys)
+};
+
+JudgedWindow judged_window(const VerifyModel& shape, const Transform& T_camera_object, const CameraIntrinsics& K,
+                           const VerifyOptions& o) {
+  const int W = K.width, H = K.height, m = std::max(0, o.edge_margin_px), border = JudgedWindow::kBorder;
+  JudgedWindow w;
+  w.u0 = -border, w.v0 = -border, w.u1 = W + border, w.v1 = H + border;
+  // (No copy of a scanned model's points for it: this runs once per hypothesis.)
+  const BoundingBox box = shape.mesh && !shape.mesh->triangles.empty() ? bounding_box(*shape.mesh) : bounding_box(shape.points);
+  double lo_u = 1e9, lo_v = 1e9, hi_u = -1e9, hi_v = -1e9;
+  bool in_front = !box.empty;
+  for (int corner = 0; corner < 8 && in_front; ++corner) {
+    const Eigen::Vector3d p(corner & 1 ? box.max.x() : box.min.x(), corner & 2 ? box.max.y() : box.min.y(),
+                            corner & 4 ? box.max.z() : box.min.z());
+    const Eigen::Vector3d c = T_camera_object * p;
+    in_front = c.z() > 1e-6;
+    const Eigen::Vector2d uv = K.project(c);
+    lo_u = std::min(lo_u, uv.x()), hi_u = std::max(hi_u, uv.x());
+    lo_v = std::min(lo_v, uv.y()), hi_v = std::max(hi_v, uv.y());
+  }
+  // A box reaching behind the camera projects to no window: draw the whole frame.
+  if (in_front) {
+    const int pad = m + 2;
+    w.u0 = std::clamp(static_cast<int>(std::floor(lo_u)) - pad, -border, W + border);
+    w.v0 = std::clamp(static_cast<int>(std::floor(lo_v)) - pad, -border, H + border);
+    w.u1 = std::clamp(static_cast<int>(std::ceil(hi_u)) + pad + 1, w.u0, W + border);
+    w.v1 = std::clamp(static_cast<int>(std::ceil(hi_v)) + pad + 1, w.v0, H + border);
   }
   // The step s between judged pixels: 1 unless the window is larger than the pixel budget.
-  const double window_pixels = static_cast<double>(u1 - u0) * static_cast<double>(v1 - v0);
+  const double window_pixels = static_cast<double>(w.u1 - w.u0) * static_cast<double>(w.v1 - w.v0);
   const double budget = static_cast<double>(std::max<std::size_t>(1, o.max_judged_pixels));
-  const int step = std::max(1, static_cast<int>(std::ceil(std::sqrt(window_pixels / budget))));
-  v.pixel_step = step;
-  // The model drawn on the sampled pixels: sample (xs, ys) is the camera's pixel (u0 + s xs, v0 + s ys).
-  CameraIntrinsics Kx = K;
-  Kx.width = std::max(1, (u1 - u0 + step - 1) / step);
-  Kx.height = std::max(1, (v1 - v0 + step - 1) / step);
-  Kx.fx /= step;
-  Kx.fy /= step;
-  Kx.cx = (K.cx - u0) / step;
-  Kx.cy = (K.cy - v0) / step;
-  RenderedFrame model;
+  w.step = std::max(1, static_cast<int>(std::ceil(std::sqrt(window_pixels / budget))));
+  w.Kx = K;
+  w.Kx.width = std::max(1, (w.u1 - w.u0 + w.step - 1) / w.step);
+  w.Kx.height = std::max(1, (w.v1 - w.v0 + w.step - 1) / w.step);
+  w.Kx.fx /= w.step;
+  w.Kx.fy /= w.step;
+  w.Kx.cx = (K.cx - w.u0) / w.step;
+  w.Kx.cy = (K.cy - w.v0) / w.step;
+  return w;
+}
+
+// The model drawn on the window's samples.
+RenderedFrame draw_model(const VerifyModel& shape, const Transform& T_camera_object, const JudgedWindow& w) {
   if (shape.mesh && !shape.mesh->triangles.empty()) {
     const MeshInstance inst{shape.mesh, T_camera_object};
     RenderOptions options;
     options.closed_winding = shape.closed_winding;
     options.instances = false;
-    model = render(std::span(&inst, 1), Kx, options);
-  } else {
-    model = render_points(shape.points, T_camera_object, Kx, shape.point_spacing_m);
+    return render(std::span(&inst, 1), w.Kx, options);
   }
-  // Model depth at sample (xs, ys), which may lie outside the drawn window.
-  const auto z_sample = [&](int xs, int ys) -> float {
-    return (xs < 0 || ys < 0 || xs >= Kx.width || ys >= Kx.height) ? NAN : model.depth.at(xs, ys);
-  };
-  // Pixels the cluster covers (within the window), each of its points splatted over its voxel's footprint.
-  const int cw = std::max(0, std::min(u1, W) - std::max(u0, 0)), ch = std::max(0, std::min(v1, H) - std::max(v0, 0));
-  const int cu0 = std::max(u0, 0), cv0 = std::max(v0, 0);
-  std::vector<char> in_cluster(static_cast<std::size_t>(cw) * static_cast<std::size_t>(ch), 0);
-  const auto cluster_at = [&](int x, int y) -> char& {
-    return in_cluster[static_cast<std::size_t>(y - cv0) * static_cast<std::size_t>(cw) + static_cast<std::size_t>(x - cu0)];
-  };
-  for (const Eigen::Vector3f& p : cluster_points) {
-    if (!p.allFinite() || !(p.z() > 0)) continue;
-    const Eigen::Vector2d uv = K.project(p.cast<double>());
-    const int half = std::max(1, static_cast<int>(std::ceil(0.5 * K.fx * shape.point_spacing_m / p.z())));
-    const int cu = nearest_pixel(uv.x()), cv = nearest_pixel(uv.y());
-    for (int y = std::max(cv0, cv - half); y <= std::min(cv0 + ch - 1, cv + half); ++y)
-      for (int x = std::max(cu0, cu - half); x <= std::min(cu0 + cw - 1, cu + half); ++x) cluster_at(x, y) = 1;
+  return render_points(shape.points, T_camera_object, w.Kx, shape.point_spacing_m);
+}
+
+// The camera pixels the cluster covers within the window (and the image), each of its points
+// splatted over its voxel's footprint.
+class ClusterMask {
+ public:
+  ClusterMask(std::span<const Eigen::Vector3f> cluster_points, const CameraIntrinsics& K, const JudgedWindow& w,
+              float point_spacing_m)
+      : u0_(std::max(w.u0, 0)), v0_(std::max(w.v0, 0)),
+        width_(std::max(0, std::min(w.u1, K.width) - u0_)), height_(std::max(0, std::min(w.v1, K.height) - v0_)),
+        mask_(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_), 0) {
+    for (const Eigen::Vector3f& p : cluster_points) {
+      if (!p.allFinite() || !(p.z() > 0)) continue;
+      const Eigen::Vector2d uv = K.project(p.cast<double>());
+      const int half = std::max(1, static_cast<int>(std::ceil(0.5 * K.fx * point_spacing_m / p.z())));
+      const int cu = nearest_pixel(uv.x()), cv = nearest_pixel(uv.y());
+      for (int y = std::max(v0_, cv - half); y <= std::min(v0_ + height_ - 1, cv + half); ++y)
+        for (int x = std::max(u0_, cu - half); x <= std::min(u0_ + width_ - 1, cu + half); ++x) at(x, y) = 1;
+    }
   }
-  std::size_t supported = 0;
+  // (x, y) is a pixel of the image inside the window.
+  bool covers(int x, int y) const { return mask_[index(x, y)] != 0; }
+
+ private:
+  std::size_t index(int x, int y) const {
+    return static_cast<std::size_t>(y - v0_) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(x - u0_);
+  }
+  char& at(int x, int y) { return mask_[index(x, y)]; }
+  int u0_, v0_, width_, height_;
+  std::vector<char> mask_;
+};
+
+// What the judgement of the model's interior pixels sums, beside the Verification's counts.
+struct InteriorSums {
+  std::size_t supported = 0;  // inliers the cluster covers
   double depth_sum = 0;
   std::size_t depth_count = 0;
   PlaneSums observed_plane, model_plane;
-  const double inv_fx = 1.0 / K.fx, inv_fy = 1.0 / K.fy;
   double model_sq = 0;
-  // The outline is looked at this many camera pixels beyond the edge: past the sensor's lateral
-  // jitter (about a pixel) and the edge margin.
-  const int reach_out = std::max(m + 3, ((step == 1 ? m : std::max(1, (m + step - 1) / step)) + 1) * step + 1);
-  const auto outline_look = [&](int x, int y, float z_edge, float tol) {
-    if (x < 0 || y < 0 || x >= W || y >= H) return;
-    const float zo = observed.at(x, y);
-    if (!std::isfinite(zo)) ++v.outline_unknown;
-    else if (zo > z_edge + tol) ++v.outline_stepped;
-    else if (zo < z_edge - tol) ++v.outline_in_front;
-    else ++v.outline_continued;
-  };
-  // A sample within ms of the window's edge has a neighbour ms away outside the window, where the
-  // model is not drawn: it cannot be interior. So only the inner window is judged, and its
-  // neighbours are read without bounds checks. (The edge test's reach stays at least m camera pixels.)
-  const int ms = step == 1 ? m : std::max(1, (m + step - 1) / step);
-  const int stride = Kx.width;
-  for (int ys = ms; ys < Kx.height - ms; ++ys) {
-    const int y = v0 + ys * step;
+};
+
+// Each sample well inside the model's outline and away from its own depth steps, against the
+// observed depth there: inlier, conflict (the scene lies behind the model: it would be seen
+// through), occluded (something in front), or unmeasured. Counts in samples.
+InteriorSums judge_interior(const RenderedFrame& model, const JudgedWindow& w, const DepthImage& observed,
+                            const CameraIntrinsics& K, const ClusterMask& cluster, int ms, const VerifyOptions& o,
+                            Verification& v) {
+  InteriorSums sums;
+  const int W = K.width, H = K.height, step = w.step, stride = w.Kx.width;
+  const double inv_fx = 1.0 / K.fx, inv_fy = 1.0 / K.fy;
+  for (int ys = ms; ys < w.Kx.height - ms; ++ys) {
+    const int y = w.v0 + ys * step;
     const float* row = model.depth.depth_m.data() + static_cast<std::ptrdiff_t>(ys) * stride;
     const float* up = row - static_cast<std::ptrdiff_t>(ms) * stride;
     const float* down = row + static_cast<std::ptrdiff_t>(ms) * stride;
     const bool row_in_image = y >= 0 && y < H;
-    for (int xs = ms; xs < Kx.width - ms; ++xs) {
+    for (int xs = ms; xs < w.Kx.width - ms; ++xs) {
       const float zm = row[xs];
       if (!std::isfinite(zm)) continue;
       const float tol = depth_tolerance(zm, o);
@@ -162,13 +176,13 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
       if (!(std::abs(row[xs + ms] - zm) <= tol && std::abs(row[xs - ms] - zm) <= tol && std::abs(up[xs] - zm) <= tol &&
             std::abs(down[xs] - zm) <= tol))
         continue;
-      const int x = u0 + xs * step;
+      const int x = w.u0 + xs * step;
       if (!row_in_image || x < 0 || x >= W) {
         ++v.unknown;  // outside the image: not seen
         continue;
       }
       const float zo = observed.at(x, y);
-      const bool cluster_here = cluster_at(x, y);
+      const bool cluster_here = cluster.covers(x, y);
       if (!std::isfinite(zo)) ++v.unknown;
       else if (zo < zm - tol) {
         // Something in front hides the model here. If that something is the cluster the model is
@@ -179,56 +193,61 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
       } else if (zo > zm + tol) ++v.conflicts;
       else {
         ++v.inliers;
-        supported += cluster_here;
+        sums.supported += cluster_here;
         const double rx = (x - K.cx) * inv_fx, ry = (y - K.cy) * inv_fy;
-        observed_plane.add(rx * zo, ry * zo, zo);
-        model_plane.add(rx * zm, ry * zm, zm);
-        model_sq += static_cast<double>(zo - zm) * static_cast<double>(zo - zm);
+        sums.observed_plane.add(rx * zo, ry * zo, zo);
+        sums.model_plane.add(rx * zm, ry * zm, zm);
+        sums.model_sq += static_cast<double>(zo - zm) * static_cast<double>(zo - zm);
       }
-      depth_sum += zm;
-      ++depth_count;
+      sums.depth_sum += zm;
+      ++sums.depth_count;
     }
   }
-  // The outline, in a pass of its own (inside the loop above it slowed every pixel's judgement): a
-  // sample whose neighbour ms away has no model is on the silhouette; look beyond it, outward.
-  for (int ys = ms; ys < Kx.height - ms; ++ys) {
-    const int y = v0 + ys * step;
+  return sums;
+}
+
+// The outline, in a pass of its own (inside the interior loop it slowed every pixel's judgement): a
+// sample whose neighbour ms away has no model is on the silhouette; look `reach_out` camera pixels
+// beyond it, outward: does the scene step away there, lie in front, or carry on at the model's depth?
+void judge_outline(const RenderedFrame& model, const JudgedWindow& w, const DepthImage& observed, const CameraIntrinsics& K,
+                   int ms, int reach_out, const VerifyOptions& o, Verification& v) {
+  const int W = K.width, H = K.height, stride = w.Kx.width;
+  const auto look = [&](int x, int y, float z_edge, float tol) {
+    if (x < 0 || y < 0 || x >= W || y >= H) return;
+    const float zo = observed.at(x, y);
+    if (!std::isfinite(zo)) ++v.outline_unknown;
+    else if (zo > z_edge + tol) ++v.outline_stepped;
+    else if (zo < z_edge - tol) ++v.outline_in_front;
+    else ++v.outline_continued;
+  };
+  for (int ys = ms; ys < w.Kx.height - ms; ++ys) {
+    const int y = w.v0 + ys * w.step;
     const float* row = model.depth.depth_m.data() + static_cast<std::ptrdiff_t>(ys) * stride;
     const float* up = row - static_cast<std::ptrdiff_t>(ms) * stride;
     const float* down = row + static_cast<std::ptrdiff_t>(ms) * stride;
-    for (int xs = ms; xs < Kx.width - ms; ++xs) {
+    for (int xs = ms; xs < w.Kx.width - ms; ++xs) {
       const float zm = row[xs];
       if (!std::isfinite(zm)) continue;
       const bool right = std::isfinite(row[xs + ms]), left = std::isfinite(row[xs - ms]);
       const bool below = std::isfinite(down[xs]), above = std::isfinite(up[xs]);
       if (right && left && below && above) continue;
       const float tol = depth_tolerance(zm, o);
-      const int x = u0 + xs * step;
-      if (!right) outline_look(x + reach_out, y, zm, tol);
-      if (!left) outline_look(x - reach_out, y, zm, tol);
-      if (!below) outline_look(x, y + reach_out, zm, tol);
-      if (!above) outline_look(x, y - reach_out, zm, tol);
+      const int x = w.u0 + xs * w.step;
+      if (!right) look(x + reach_out, y, zm, tol);
+      if (!left) look(x - reach_out, y, zm, tol);
+      if (!below) look(x, y + reach_out, zm, tol);
+      if (!above) look(x, y - reach_out, zm, tol);
     }
   }
-  // Counts in the camera's pixels: each sample stands for s x s of them.
-  const std::size_t area = static_cast<std::size_t>(step) * static_cast<std::size_t>(step);
-  v.mean_depth_m = depth_count ? depth_sum / static_cast<double>(depth_count) : 0.0;
-  v.model_rms_m = observed_plane.n > 0 ? std::sqrt(model_sq / observed_plane.n) : 0.0;
-  v.plane_rms_m = observed_plane.rms_distance();
-  v.model_relief_m = model_plane.rms_distance();
-  const std::size_t outline_judged = v.outline_continued + v.outline_stepped;
-  v.outline_continuation = outline_judged ? static_cast<double>(v.outline_continued) / static_cast<double>(outline_judged) : 0.0;
-  v.inliers *= area, v.conflicts *= area, v.occluded *= area, v.unknown *= area, v.hidden_by_cluster *= area;
-  supported *= area;
-  const std::size_t judged = v.inliers + v.conflicts + v.hidden_by_cluster;
-  v.inlier_fraction = judged ? static_cast<double>(v.inliers) / static_cast<double>(judged) : 0.0;
-  const std::size_t all = judged + v.occluded + v.unknown;
-  v.visible_fraction = all ? static_cast<double>(v.inliers) / static_cast<double>(all) : 0.0;
-  const std::size_t unhidden = judged + v.unknown;
-  v.unmeasured_fraction = unhidden ? static_cast<double>(v.unknown) / static_cast<double>(unhidden) : 0.0;
-  v.model_support = v.inliers ? static_cast<double>(supported) / static_cast<double>(v.inliers) : 0.0;
-  v.conflict_fraction = judged ? static_cast<double>(v.conflicts + v.hidden_by_cluster) / static_cast<double>(judged) : 0.0;
-  // The other way round: how much of the cluster lies on the model's surface (within a pixel).
+}
+
+// The other way round: the share of the cluster's points that lie on the model's surface (within
+// the depth tolerance and a pixel).
+double explained_share(std::span<const Eigen::Vector3f> cluster_points, const RenderedFrame& model, const JudgedWindow& w,
+                       const CameraIntrinsics& K, const VerifyOptions& o) {
+  const auto z_sample = [&](int xs, int ys) -> float {
+    return (xs < 0 || ys < 0 || xs >= w.Kx.width || ys >= w.Kx.height) ? NAN : model.depth.at(xs, ys);
+  };
   std::size_t explained = 0, counted = 0;
   for (const Eigen::Vector3f& p : cluster_points) {
     if (!p.allFinite() || !(p.z() > 0)) continue;
@@ -237,9 +256,9 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
     // The pixels within one of the point's; where every s-th pixel is drawn, the samples within one
     // (s = 2: two pixels), or from s = 3 on the nearest sample only (within s/2 pixels): the
     // neighbours of a sample would reach s pixels and more, and explain poses that are off.
-    const int us = nearest_pixel((uv.x() - u0) / step), ws = nearest_pixel((uv.y() - v0) / step);
+    const int us = nearest_pixel((uv.x() - w.u0) / w.step), ws = nearest_pixel((uv.y() - w.v0) / w.step);
     const float tol = depth_tolerance(p.z(), o);
-    const int reach = step <= 2 ? 1 : 0;
+    const int reach = w.step <= 2 ? 1 : 0;
     bool hit = false;
     for (int dv = -reach; dv <= reach && !hit; ++dv)
       for (int du = -reach; du <= reach && !hit; ++du) {
@@ -248,7 +267,53 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
       }
     explained += hit ? 1 : 0;
   }
-  v.cluster_explained = counted ? static_cast<double>(explained) / static_cast<double>(counted) : 0.0;
+  return counted ? static_cast<double>(explained) / static_cast<double>(counted) : 0.0;
+}
+
+// The counts (in samples) scaled to camera pixels, and the fractions the verdict is made of.
+void summarize(const InteriorSums& sums, int step, Verification& v) {
+  v.mean_depth_m = sums.depth_count ? sums.depth_sum / static_cast<double>(sums.depth_count) : 0.0;
+  v.model_rms_m = sums.observed_plane.n > 0 ? std::sqrt(sums.model_sq / sums.observed_plane.n) : 0.0;
+  v.plane_rms_m = sums.observed_plane.rms_distance();
+  v.model_relief_m = sums.model_plane.rms_distance();
+  const std::size_t outline_judged = v.outline_continued + v.outline_stepped;
+  v.outline_continuation = outline_judged ? static_cast<double>(v.outline_continued) / static_cast<double>(outline_judged) : 0.0;
+  // Each sample stands for s x s camera pixels.
+  const std::size_t area = static_cast<std::size_t>(step) * static_cast<std::size_t>(step);
+  v.inliers *= area, v.conflicts *= area, v.occluded *= area, v.unknown *= area, v.hidden_by_cluster *= area;
+  const std::size_t supported = sums.supported * area;
+  const std::size_t judged = v.inliers + v.conflicts + v.hidden_by_cluster;
+  v.inlier_fraction = judged ? static_cast<double>(v.inliers) / static_cast<double>(judged) : 0.0;
+  const std::size_t all = judged + v.occluded + v.unknown;
+  v.visible_fraction = all ? static_cast<double>(v.inliers) / static_cast<double>(all) : 0.0;
+  const std::size_t unhidden = judged + v.unknown;
+  v.unmeasured_fraction = unhidden ? static_cast<double>(v.unknown) / static_cast<double>(unhidden) : 0.0;
+  v.model_support = v.inliers ? static_cast<double>(supported) / static_cast<double>(v.inliers) : 0.0;
+  v.conflict_fraction = judged ? static_cast<double>(v.conflicts + v.hidden_by_cluster) / static_cast<double>(judged) : 0.0;
+}
+
+}  // namespace
+
+Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_object, const DepthImage& observed,
+                         const CameraIntrinsics& K, std::span<const Eigen::Vector3f> cluster_points,
+                         const VerifyOptions& o) {
+  Verification v;
+  const JudgedWindow w = judged_window(shape, T_camera_object, K, o);
+  v.pixel_step = w.step;
+  const RenderedFrame model = draw_model(shape, T_camera_object, w);
+  const ClusterMask cluster(cluster_points, K, w, shape.point_spacing_m);
+  // A sample within ms of the window's edge has a neighbour ms away outside the window, where the
+  // model is not drawn: it cannot be interior. So only the inner window is judged, and its
+  // neighbours are read without bounds checks. (The edge test's reach stays at least m camera pixels.)
+  const int m = std::max(0, o.edge_margin_px), step = w.step;
+  const int ms = step == 1 ? m : std::max(1, (m + step - 1) / step);
+  const InteriorSums sums = judge_interior(model, w, observed, K, cluster, ms, o, v);
+  // The outline is looked at this many camera pixels beyond the edge: past the sensor's lateral
+  // jitter (about a pixel) and the edge margin.
+  const int reach_out = std::max(m + 3, (ms + 1) * step + 1);
+  judge_outline(model, w, observed, K, ms, reach_out, o, v);
+  summarize(sums, step, v);
+  v.cluster_explained = explained_share(cluster_points, model, w, K, o);
   v.score = v.inlier_fraction * v.cluster_explained;
   v.accepted = passes(v, o);
   return v;

@@ -34,12 +34,17 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
     prepared_.push_back(std::make_unique<PreparedObject>());
     largest_diameter_m_ = std::max(largest_diameter_m_, o.diameter_m);
   }
-  if (db.objects.size() <= options_.prepare_objects_up_to) {
+  if (db.objects.size() <= options_.run.prepare_objects_up_to) {
     for (std::uint32_t o = 0; o < db.objects.size() && options_.icp.grid_cell_m > 0; ++o) {
       icp_target(o).grid(options_.icp.grid_cell_m, options_.icp.reach_m()).fill_all();
     }
   }
   // Scenes are described at the database's resolution, so that their VFHs are comparable.
+  if (options_.segment.voxel_m != SegmentOptions{}.voxel_m && options_.segment.voxel_m != db.params.voxel_m) {
+    throw Error(fmt::format("recognize: scenes are described at the database's voxel size ({} mm), not {} mm: "
+                            "build the database at the size wanted",
+                            db.params.voxel_m * 1000, options_.segment.voxel_m * 1000));
+  }
   options_.segment.voxel_m = db.params.voxel_m;
 }
 
@@ -63,7 +68,7 @@ VerifyModel Recognizer::verify_model(std::uint32_t object) const {
 }
 
 bool Recognizer::out_of_time(Recognition& out) const {
-  if (options_.deadline_ms > 0 && ms_since(out.started) > options_.deadline_ms) out.cut_short = true;
+  if (options_.run.deadline_ms > 0 && ms_since(out.started) > options_.run.deadline_ms) out.cut_short = true;
   return out.cut_short;
 }
 
@@ -80,7 +85,7 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     if (out_of_time(out)) break;
     recognize_region(cluster_points(seg.points, cluster), frame, out, 0);
   }
-  if (options_.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
+  if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
   out.times.total_ms = ms_since(start);
   return out;
 }
@@ -97,13 +102,13 @@ void Recognizer::resolve_scene(const Frame& frame, Recognition& out) const {
   });
   std::vector<std::vector<std::uint32_t>> claims(order.size());
   const auto n = static_cast<std::ptrdiff_t>(order.size());
-#pragma omp parallel for schedule(dynamic, 1) if (options_.parallel_hypotheses)
+#pragma omp parallel for schedule(dynamic, 1) if (options_.run.parallel_hypotheses)
   for (std::ptrdiff_t k = 0; k < n; ++k) {
     const Detection& d = out.detections[order[static_cast<std::size_t>(k)]];
     claims[static_cast<std::size_t>(k)] =
         claimed_pixels(verify_model(d.object_index), d.T_camera_object, frame.depth, frame.K, options_.verify);
   }
-  const std::vector<ClaimVerdict> verdicts = resolve_claims(claims, options_.scene_claims);
+  const std::vector<ClaimVerdict> verdicts = resolve_claims(claims, options_.accept.scene_claims);
   std::vector<char> keep(order.size(), 0);
   for (std::size_t k = 0; k < order.size(); ++k) keep[order[k]] = verdicts[k].kept ? 1 : 0;
   std::vector<Detection> kept;
@@ -119,9 +124,9 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   // Anything found inside a split cluster stands on less evidence than an isolated cluster, and is
   // checked more strictly.
   VerifyOptions part_verify = options_.verify;
-  part_verify.max_unmeasured_fraction = std::min(part_verify.max_unmeasured_fraction, options_.part_max_unmeasured_fraction);
-  part_verify.min_inlier_fraction = std::max(part_verify.min_inlier_fraction, options_.part_min_inlier_fraction);
-  part_verify.min_cluster_explained = std::max(part_verify.min_cluster_explained, options_.part_min_cluster_explained);
+  part_verify.max_unmeasured_fraction = std::min(part_verify.max_unmeasured_fraction, options_.split.part_max_unmeasured_fraction);
+  part_verify.min_inlier_fraction = std::max(part_verify.min_inlier_fraction, options_.split.part_min_inlier_fraction);
+  part_verify.min_cluster_explained = std::max(part_verify.min_cluster_explained, options_.split.part_min_cluster_explained);
   // Verification gives no verdict past its range (VerifyOptions::max_depth_m): a region that lies
   // beyond it is not tried at all, rather than tried against every view to no end.
   if (points.size() > 0) {
@@ -130,7 +135,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
     if (z / static_cast<double>(points.size()) > options_.verify.max_depth_m) return;
   }
   const double size = bounding_box(points.points).diagonal();
-  if (size <= options_.max_cluster_size_factor * largest_diameter_m_) {
+  if (size <= options_.match.max_region_size_factor * largest_diameter_m_) {
     if (std::optional<Detection> det = recognize_cluster(points, frame, depth > 0 ? part_verify : options_.verify, out)) {
       det->from_split_cluster = depth > 0;
       recognize_rest(points, std::move(*det), frame, out, depth);
@@ -139,12 +144,12 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   }
   // Nothing passed: the region may be objects touching each other. Try its convex parts, largest
   // first. Two objects side by side span at most twice the largest object.
-  if (!options_.split_touching || depth >= options_.max_split_depth ||
-      size > options_.max_split_size_factor * largest_diameter_m_ || out_of_time(out)) {
+  if (!options_.split.enabled || depth >= options_.split.max_depth ||
+      size > options_.split.max_size_factor * largest_diameter_m_ || out_of_time(out)) {
     return;
   }
   auto t = Clock::now();
-  const std::vector<Cluster> parts = convex_segments(points, options_.split);
+  const std::vector<Cluster> parts = convex_segments(points, options_.split.parts);
   out.times.split_ms += ms_since(t);
   // One part that is nearly the whole region has been tried already.
   if (parts.empty() || (parts.size() == 1 && parts[0].size() > 0.9 * static_cast<double>(points.size()))) return;
@@ -152,7 +157,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   for (const Cluster& part : parts) {
     if (out_of_time(out)) return;
     const PointCloud part_points = cluster_points(points, part);
-    if (bounding_box(part_points.points).diagonal() > options_.max_cluster_size_factor * largest_diameter_m_) continue;
+    if (bounding_box(part_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
     std::optional<Detection> det = recognize_cluster(part_points, frame, part_verify, out);
     if (!det) continue;
     det->from_split_cluster = true;
@@ -166,7 +171,7 @@ void Recognizer::recognize_rest(const PointCloud& points, Detection detection, c
   // Explain the object's points away and start again on what is left: a smaller object touching it
   // (less of the cluster than verification lets go unexplained), or, in a split cluster, the other
   // objects whole (a mug's concave inside is not one convex part, but it is one cluster).
-  const bool go_on = options_.split_touching && depth < options_.max_split_depth;
+  const bool go_on = options_.split.enabled && depth < options_.split.max_depth;
   std::vector<Cluster> rest_clusters;
   if (go_on) {
     const auto t = Clock::now();
@@ -218,7 +223,7 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const T
   const VerifyModel model = verify_model(object);
   const auto start = Clock::now();
   const auto n = static_cast<std::ptrdiff_t>(out.size());
-#pragma omp parallel for schedule(dynamic, 1) if (options_.parallel_hypotheses && n > 1)
+#pragma omp parallel for schedule(dynamic, 1) if (options_.run.parallel_hypotheses && n > 1)
   for (std::ptrdiff_t k = 0; k < n; ++k) {
     Refined& h = out[static_cast<std::size_t>(k)];
     auto t = Clock::now();
@@ -235,8 +240,8 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const T
   for (Refined& h : out) {
     if (!h.verified || !h.v.accepted) continue;
     h.confidence = pose_confidence(h.v);
-    if (options_.on_verified) options_.on_verified({object, h.T_camera_object, h.v, h.confidence});
-    h.accepted = h.confidence >= options_.min_confidence;
+    if (options_.accept.on_verified) options_.accept.on_verified({object, h.T_camera_object, h.v, h.confidence});
+    h.accepted = h.confidence >= options_.accept.min_confidence;
   }
   // The wall time, shared between the two stages as their summed times are.
   const double wall = ms_since(start);
@@ -249,150 +254,169 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const T
   return out;
 }
 
-std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points, const Frame& frame,
-                                                       const VerifyOptions& verify, Recognition& out) const {
+std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& points, const Frame& frame,
+                                                              const VerifyOptions& verify, Recognition& out) const {
   DescribeTimes dt;
-  const Description d = describe(points, db_.params.describe, &dt);
+  Region region{describe(points, db_.params.describe, &dt), {}, {}, 0.0, verify, verify, false};
   out.times.normals_ms += dt.normals_ms;
   out.times.vfh_ms += dt.vfh_ms;
   out.times.crh_ms += dt.crh_ms;
+  const Description& d = region.description;
   if (d.cloud.size() < 3) return std::nullopt;
   ++out.regions;
   const auto t_match = Clock::now();
-  const std::vector<Match> matches = index_.nearest(d.vfh, options_.matches, options_.max_matches);
+  region.matches = index_.nearest(d.vfh, options_.match.per_object, options_.match.at_most);
   out.times.match_ms += ms_since(t_match);
-  const std::vector<Eigen::Vector3f> icp_source = voxel_downsample(d.cloud, options_.icp_voxel_m).points;
-  // Objects whose diameter is below this cannot have min_cluster_explained of the cluster on their
+  region.icp_source = voxel_downsample(d.cloud, db_.params.icp_voxel_m).points;
+  // Objects whose diameter is below this cannot have min_cluster_explained of the region on their
   // surface (an explained point lies within the depth tolerance, and a pixel or so, of the model).
-  double smallest_diameter = 0;
-  if (options_.skip_objects_too_small && frame.K.fx > 0) {
+  if (options_.match.skip_objects_too_small && frame.K.fx > 0) {
     float z_far = 0;
     for (const auto& p : d.cloud.points) z_far = std::max(z_far, p.z());
     const double slack = 2.0 * (depth_tolerance(z_far, verify) + 4.0 * z_far / frame.K.fx);
-    smallest_diameter = core_width(d.cloud.points, verify.min_cluster_explained) - slack;
+    region.smallest_diameter = core_width(d.cloud.points, verify.min_cluster_explained) - slack;
   }
+  region.near_miss.max_conflict_fraction = std::max(verify.max_conflict_fraction, options_.accept.near_miss_conflict_fraction);
+  region.try_near_misses = options_.accept.try_half_turns && region.near_miss.max_conflict_fraction > verify.max_conflict_fraction;
+  return region;
+}
 
-  // A pose turned half a turn about each of the object's own axes (through its box centre).
-  const auto half_turns = [&](const Transform& T_camera_object, std::uint32_t object_index) {
-    const BoundingBox box = bounding_box(db_.objects[object_index].model_points);
-    const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
-    std::vector<Transform> turned;
-    for (int axis = 0; axis < 3; ++axis) {
-      const Eigen::Matrix3d R = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
-      turned.push_back(T_camera_object * make_transform(R, centre - R * centre));
-    }
-    return turned;
-  };
-  VerifyOptions near_miss = verify;
-  near_miss.max_conflict_fraction = std::max(verify.max_conflict_fraction, options_.near_miss_conflict_fraction);
-  const bool try_near_misses = options_.try_half_turns && near_miss.max_conflict_fraction > verify.max_conflict_fraction;
+std::vector<Transform> Recognizer::half_turns(const Transform& T_camera_object, std::uint32_t object) const {
+  // Half a turn about each of the object's own axes, through its box centre.
+  const BoundingBox box = bounding_box(db_.objects[object].model_points);
+  const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
+  std::vector<Transform> turned;
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
+    turned.push_back(T_camera_object * make_transform(R, centre - R * centre));
+  }
+  return turned;
+}
 
-  // The poses one database view gives (one per CRH roll peak), each refined and verified; the
-  // first accepted, or with keep_best the best.
-  const auto try_view = [&](std::size_t rank) {
-    std::optional<Detection> found;
-    const ViewEntry& view = db_.views[matches[rank].view];
-    const DatabaseObject& object = db_.objects[view.object];
-    if (object.diameter_m < smallest_diameter) return found;
-    const auto t0 = Clock::now();
-    const std::vector<float> rolls = crh_roll_angles(view.crh, d.crh, options_.roll);
-    out.times.crh_ms += ms_since(t0);
-    std::vector<Transform> initial;
-    for (const float roll : rolls) {
-      initial.push_back(crh_alignment(view.centroid.cast<double>(), d.centroid.cast<double>(), roll) * view.T_view_object);
-    }
-    // All rolls at once on the threads there are; then taken in order, as one after the other would.
-    const std::vector<Refined> refined = refine_and_verify(initial, view.object, icp_source, d.cloud.points, frame, verify,
-                                                           out.times);
-    const auto take = [&](const Refined& h, float roll) {
-      Detection det;
-      det.object_id = object.id;
-      det.object_name = object.name;
-      det.object_index = view.object;
-      det.T_camera_object = h.T_camera_object;
-      det.score = h.confidence;
-      det.icp_fitness = h.icp.fitness;
-      det.icp_rmse_m = h.icp.inlier_rmse;
-      det.match_rank = static_cast<int>(rank);
-      det.roll_deg = roll;
-      det.cluster_points = d.cloud.size();
-      det.verification = h.v;
-      found = det;
-    };
-    const Refined* nearest_miss = nullptr;
-    std::size_t nearest_miss_roll = 0;
-    for (std::size_t k = 0; k < refined.size(); ++k) {
-      const Refined& h = refined[k];
-      ++out.hypotheses;
-      if (!h.verified) continue;
-      if (!h.v.accepted) {
-        if (try_near_misses && passes(h.v, near_miss) && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
-          nearest_miss = &h;
-          nearest_miss_roll = k;
-        }
-        continue;
+Detection Recognizer::detection_from(const Refined& h, const Region& region, std::size_t rank, float roll_deg) const {
+  const ViewEntry& view = db_.views[region.matches[rank].view];
+  const DatabaseObject& object = db_.objects[view.object];
+  Detection det;
+  det.object_id = object.id;
+  det.object_name = object.name;
+  det.object_index = view.object;
+  det.T_camera_object = h.T_camera_object;
+  det.score = h.confidence;
+  det.icp_fitness = h.icp.fitness;
+  det.icp_rmse_m = h.icp.inlier_rmse;
+  det.match_rank = static_cast<int>(rank);
+  det.roll_deg = roll_deg;
+  det.cluster_points = region.description.cloud.size();
+  det.verification = h.v;
+  return det;
+}
+
+std::optional<Detection> Recognizer::try_view(const Region& region, std::size_t rank, const Frame& frame,
+                                              Recognition& out) const {
+  // The poses one database view gives (one per CRH roll peak), each refined and verified; the first
+  // accepted, or with keep_best the best.
+  std::optional<Detection> found;
+  const Description& d = region.description;
+  const ViewEntry& view = db_.views[region.matches[rank].view];
+  if (db_.objects[view.object].diameter_m < region.smallest_diameter) return found;
+  const auto t0 = Clock::now();
+  const std::vector<float> rolls = crh_roll_angles(view.crh, d.crh, options_.match.roll);
+  out.times.crh_ms += ms_since(t0);
+  std::vector<Transform> initial;
+  for (const float roll : rolls) {
+    initial.push_back(crh_alignment(view.centroid.cast<double>(), d.centroid.cast<double>(), roll) * view.T_view_object);
+  }
+  // All rolls at once on the threads there are; then taken in order, as one after the other would.
+  const std::vector<Refined> refined =
+      refine_and_verify(initial, view.object, region.icp_source, d.cloud.points, frame, region.verify, out.times);
+  const Refined* nearest_miss = nullptr;
+  std::size_t nearest_miss_roll = 0;
+  for (std::size_t k = 0; k < refined.size(); ++k) {
+    const Refined& h = refined[k];
+    ++out.hypotheses;
+    if (!h.verified) continue;
+    if (!h.v.accepted) {
+      if (region.try_near_misses && passes(h.v, region.near_miss) && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
+        nearest_miss = &h;
+        nearest_miss_roll = k;
       }
-      if (!h.accepted) continue;  // passed verification, but not confidently enough
-      if (found && found->verification.score >= h.v.score) continue;
-      take(h, rolls[k]);
-      if (!options_.keep_best) break;
+      continue;
     }
-    if (!found && nearest_miss && !out_of_time(out)) {
-      // Nothing passed, but one pose failed only by seeing through it: try it turned about its axes.
-      const std::vector<Refined> turned = refine_and_verify(half_turns(nearest_miss->T_camera_object, view.object),
-                                                            view.object, icp_source, d.cloud.points, frame, verify, out.times);
-      out.hypotheses += turned.size();
-      for (const Refined& h : turned) {
-        if (h.accepted && (!found || h.v.score > found->verification.score)) take(h, rolls[nearest_miss_roll]);
+    if (!h.accepted) continue;  // passed verification, but not confidently enough
+    if (found && found->verification.score >= h.v.score) continue;
+    found = detection_from(h, region, rank, rolls[k]);
+    if (!options_.accept.keep_best) break;
+  }
+  if (!found && nearest_miss && !out_of_time(out)) {
+    // Nothing passed, but one pose failed only by seeing through it: try it turned about its axes.
+    const std::vector<Refined> turned = refine_and_verify(half_turns(nearest_miss->T_camera_object, view.object),
+                                                          view.object, region.icp_source, d.cloud.points, frame,
+                                                          region.verify, out.times);
+    out.hypotheses += turned.size();
+    for (const Refined& h : turned) {
+      if (h.accepted && (!found || h.v.score > found->verification.score)) {
+        found = detection_from(h, region, rank, rolls[nearest_miss_roll]);
       }
     }
-    return found;
-  };
+  }
+  return found;
+}
 
+void Recognizer::challenge(const Region& region, std::size_t rank, Detection& best, const Frame& frame,
+                           Recognition& out) const {
+  // Another object may explain the region better (two boxes of similar size): the other objects
+  // among the next matches get a few of their nearest views each, and the higher score wins.
+  std::vector<std::size_t> tried(db_.objects.size(), 0);
+  const std::size_t end = std::min(region.matches.size(), rank + options_.match.per_object);
+  for (; rank < end && !out_of_time(out); ++rank) {
+    const std::uint32_t object = db_.views[region.matches[rank].view].object;
+    if (object == best.object_index || tried[object]++ >= options_.match.challenger_views) continue;
+    std::optional<Detection> det = try_view(region, rank, frame, out);
+    if (det && det->verification.score > best.verification.score) best = std::move(*det);
+  }
+}
+
+void Recognizer::turn_if_better(const Region& region, Detection& best, const Frame& frame, Recognition& out) const {
+  // The pose turned about the object's own axes, each refined and verified; the best is kept, and
+  // the runner-up's score says by how much it won.
+  const std::uint32_t object = best.object_index;
+  const std::vector<Refined> turned = refine_and_verify(half_turns(best.T_camera_object, object), object,
+                                                        region.icp_source, region.description.cloud.points, frame,
+                                                        region.verify, out.times);
+  out.hypotheses += turned.size();
+  double runner_up = 0;
+  for (const Refined& h : turned) {
+    if (!h.accepted) continue;
+    if (h.v.score > best.verification.score) {
+      runner_up = std::max(runner_up, best.verification.score);
+      best.T_camera_object = h.T_camera_object;
+      best.score = h.confidence;
+      best.icp_fitness = h.icp.fitness;
+      best.icp_rmse_m = h.icp.inlier_rmse;
+      best.verification = h.v;
+    } else {
+      runner_up = std::max(runner_up, h.v.score);
+    }
+  }
+  best.runner_up_score = runner_up;
+}
+
+std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points, const Frame& frame,
+                                                       const VerifyOptions& verify, Recognition& out) const {
+  const std::optional<Region> region = describe_region(points, frame, verify, out);
+  if (!region) return std::nullopt;
+  // The matches in order until one passes (with keep_best: all of them, the best kept).
   std::optional<Detection> best;
   std::size_t rank = 0;
-  for (; rank < matches.size() && !(best && !options_.keep_best); ++rank) {
+  for (; rank < region->matches.size() && !(best && !options_.accept.keep_best); ++rank) {
     if (out_of_time(out)) break;
-    std::optional<Detection> det = try_view(rank);
+    std::optional<Detection> det = try_view(*region, rank, frame, out);
     if (det && (!best || det->verification.score > best->verification.score)) best = std::move(det);
   }
-  if (best && !options_.keep_best && options_.challenger_views > 0) {
-    // Another object may explain the cluster better (two boxes of similar size): the other objects
-    // among the next matches get a few of their nearest views each, and the higher score wins.
-    std::vector<std::size_t> tried(db_.objects.size(), 0);
-    const std::size_t end = std::min(matches.size(), rank + options_.matches);
-    for (; rank < end && !out_of_time(out); ++rank) {
-      const std::uint32_t object = db_.views[matches[rank].view].object;
-      if (object == best->object_index || tried[object]++ >= options_.challenger_views) continue;
-      std::optional<Detection> det = try_view(rank);
-      if (det && det->verification.score > best->verification.score) best = std::move(det);
-    }
-  }
-  if (best && options_.try_half_turns && !out_of_time(out)) {
-    // The same pose turned about the object's own axes, each refined and verified.
-    const std::uint32_t object_index = best->object_index;
-    const std::vector<Refined> turned = refine_and_verify(half_turns(best->T_camera_object, object_index), object_index,
-                                                          icp_source, d.cloud.points, frame, verify, out.times);
-    out.hypotheses += turned.size();
-    Detection chosen = *best;
-    double runner_up = 0;
-    for (const Refined& h : turned) {
-      if (!h.accepted) continue;
-      if (h.v.score > chosen.verification.score) {
-        runner_up = std::max(runner_up, chosen.verification.score);
-        chosen.T_camera_object = h.T_camera_object;
-        chosen.score = h.confidence;
-        chosen.icp_fitness = h.icp.fitness;
-        chosen.icp_rmse_m = h.icp.inlier_rmse;
-        chosen.verification = h.v;
-      } else {
-        runner_up = std::max(runner_up, h.v.score);
-      }
-    }
-    chosen.runner_up_score = runner_up;
-    best = chosen;
-  }
-  if (best && options_.canonical_poses) {
+  if (!best) return best;
+  if (!options_.accept.keep_best && options_.match.challenger_views > 0) challenge(*region, rank, *best, frame, out);
+  if (options_.accept.try_half_turns && !out_of_time(out)) turn_if_better(*region, *best, frame, out);
+  if (options_.accept.canonical_poses) {
     // Of the poses the object's symmetries make equivalent, always the same one.
     best->T_camera_object = canonical_pose(best->T_camera_object, db_.objects[best->object_index].symmetries);
   }

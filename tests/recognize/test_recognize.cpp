@@ -83,6 +83,18 @@ TEST(Recognize, ARecognizerKeepsTheDatabaseItIsGivenOrShares) {
   EXPECT_THROW(Recognizer(std::shared_ptr<const ViewDatabase>()), Error);
 }
 
+TEST(Recognize, OptionsAreGivenByStageAndTheDatabaseFixesTheVoxelSize) {
+  const Recognizer r(jug_db(), {.accept = {.min_confidence = 0.5}, .run = {.deadline_ms = 30}});
+  EXPECT_EQ(r.options().accept.min_confidence, 0.5);
+  EXPECT_EQ(r.options().run.deadline_ms, 30);
+  EXPECT_EQ(r.options().match.per_object, MatchOptions{}.per_object);  // the rest as by default
+  EXPECT_EQ(r.options().segment.voxel_m, jug_db().params.voxel_m);
+  // A scene described at another voxel size than the views would match none of them.
+  RecognizerOptions coarser;
+  coarser.segment.voxel_m = 2 * jug_db().params.voxel_m;
+  EXPECT_THROW(Recognizer(jug_db(), coarser), Error);
+}
+
 TEST(Recognize, ADeadlineCutsTheFrameShortAndSaysSo) {
   SeedExperimentOptions setup;
   setup.distances_m = {1.0};
@@ -93,7 +105,7 @@ TEST(Recognize, ADeadlineCutsTheFrameShortAndSaysSo) {
   ASSERT_EQ(full.detections.size(), 1u);
   EXPECT_FALSE(full.cut_short);
   RecognizerOptions generous;
-  generous.deadline_ms = 60'000;  // never reached: the same answer
+  generous.run.deadline_ms = 60'000;  // never reached: the same answer
   const Recognition in_time = Recognizer(jug_db(), generous).recognize(frame);
   EXPECT_FALSE(in_time.cut_short);
   ASSERT_EQ(in_time.detections.size(), 1u);
@@ -101,7 +113,7 @@ TEST(Recognize, ADeadlineCutsTheFrameShortAndSaysSo) {
   EXPECT_EQ(in_time.hypotheses, full.hypotheses);
   // Gone before the first cluster is looked at: nothing tried, nothing claimed, and flagged.
   RecognizerOptions tight;
-  tight.deadline_ms = 1e-6;
+  tight.run.deadline_ms = 1e-6;
   const Recognition late = Recognizer(jug_db(), tight).recognize(frame);
   EXPECT_TRUE(late.cut_short);
   EXPECT_TRUE(late.detections.empty());
@@ -262,7 +274,7 @@ TEST(Recognize, ObjectsTooSmallForAClusterAreSkippedWithTheSameResult) {
   const SimulatedFrame f = simulate_image(scene.ds, SimImage{{{0, scene.jug_pose}, {2, box_pose}}}, SensorModel::kinect_v1(), 3);
   const Frame frame = frame_from_depth(f.depth, K);
   RecognizerOptions all;
-  all.skip_objects_too_small = false;
+  all.match.skip_objects_too_small = false;
   const Recognition skipping = Recognizer(db).recognize(frame), trying = Recognizer(db, all).recognize(frame);
   EXPECT_LT(skipping.hypotheses, trying.hypotheses);
   ASSERT_EQ(skipping.detections.size(), trying.detections.size());
@@ -285,8 +297,8 @@ TEST(Recognize, TouchingObjectsAreBothFound) {
   // default threshold fit for 98 % precision (0.917; docs/CONFIDENCE.md): what is tested here is
   // the splitting, at a threshold that takes it.
   RecognizerOptions no_split, split;
-  no_split.split_touching = false;
-  no_split.min_confidence = split.min_confidence = 0.85;
+  no_split.split.enabled = false;
+  no_split.accept.min_confidence = split.accept.min_confidence = 0.85;
   EXPECT_LE(Recognizer(db, no_split).recognize(frame).detections.size(), 1u);
   const Recognition r = Recognizer(db, split).recognize(frame);
   ASSERT_EQ(r.detections.size(), 2u);

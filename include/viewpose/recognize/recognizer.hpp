@@ -33,85 +33,113 @@ struct VerifiedHypothesis {
   double confidence = 0;  ///< pose_confidence(verification)
 };
 
-struct RecognizerOptions {
-  SegmentOptions segment;
-  std::size_t matches = 20;      ///< nearest views tried per cluster and object (thesis: 20, one object)
-  /// At most this many views per cluster in all, the nearest (each object at most `matches`): with
+/// Which database views are tried for a region (a cluster, a convex part, what a detection left of
+/// a cluster), and the poses each gives.
+struct MatchOptions {
+  std::size_t per_object = 20;  ///< nearest views tried per region and object (thesis: 20, one object)
+  /// At most this many views per region in all, the nearest (each object at most `per_object`): with
   /// up to six objects every object gets its 20; a database of a thousand gets the 120 nearest.
-  std::size_t max_matches = 120;
+  std::size_t at_most = 120;
   /// CRH peaks: up to 10 rolls per view, down to half the best peak. PCL's 5 and 0.8 missed 1 of 100
   /// frames of the simulated seed experiment (a narrow side view); these found all 100, still
   /// without a false positive (docs/RESULTS.md).
   RollOptions roll = {10, 0.2f, 0.5f};
-  float icp_voxel_m = 0.005f;    ///< the cluster is thinned to this for ICP (thesis: 5 mm)
-  IcpOptions icp;
-  VerifyOptions verify;
-  /// A pose that passes verification's bounds is accepted only when its confidence (pose/confidence:
-  /// the estimated probability that it is right) reaches this. A detection's score is that confidence.
-  /// The default is the confidence that kept 98 % of the poses right on the simulated rooms and
-  /// clutter the model was fit on (docs/CONFIDENCE.md).
-  double min_confidence = 0.917;
-  /// Called in order, on the calling thread, for every hypothesis that passed verification's bounds,
-  /// before the confidence threshold: what the confidence model is fit on (viewpose bop --hypotheses).
-  std::function<void(const VerifiedHypothesis&)> on_verified;
-  /// Verification draws each object's mesh simplified to within this (0: the mesh as it is). CAD and
-  /// scanned meshes hold tens of thousands of triangles where a few hundred draw the same depth to
-  /// within 2 mm, two fifths of the smallest depth tolerance; drawing was most of a real frame's time.
-  float verify_mesh_error_m = 0.002f;
-  bool keep_best = false;        ///< try every hypothesis, keep the best accepted (slower)
-  /// Skip the views of objects too small to explain a cluster: verification wants
+  /// Skip the views of objects too small to explain a region: verification wants
   /// verify.min_cluster_explained of its points on the model's surface, and no object can cover
   /// points spread wider than its diameter (plus the depth tolerance and a few pixels each side;
   /// core_width). Changes no result, only what is tried: a large unknown thing (a box, a monitor)
   /// is not tried against every small object's views.
   bool skip_objects_too_small = true;
-  /// Once a pose of one object passes, each other object among the next `matches` matches tries up
-  /// to this many of its views, and the higher verification score wins (0: the first pass stands).
+  /// Once a pose of one object passes, each other object among the next `per_object` matches tries
+  /// up to this many of its views, and the higher verification score wins (0: the first pass stands).
   std::size_t challenger_views = 3;
+  double max_region_size_factor = 1.5;  ///< regions wider than this x the largest object are not tried
+};
+
+/// Which verified poses become detections, and in what form.
+struct AcceptOptions {
+  /// A pose that passes verification's bounds is accepted only when its confidence (pose/confidence:
+  /// the estimated probability that it is right) reaches this. A detection's score is that confidence.
+  /// The default is the confidence that kept 98 % of the poses right on the simulated rooms and
+  /// clutter the model was fit on (docs/CONFIDENCE.md).
+  double min_confidence = 0.917;
+  bool keep_best = false;  ///< try every hypothesis, keep the best accepted (slower)
   /// Once a pose passes, also try it turned half a turn about each of the object's axes (refined and
   /// verified in turn) and keep the best: objects that are nearly symmetric (a jug whose handle is a
   /// small share of its surface) otherwise come out the wrong way round about as often as not.
   bool try_half_turns = true;
-  /// A view's best pose that fails only by its free-space conflicts, with at most this share, is
-  /// most often the object the wrong way round (a jug with its handle behind): its half turns are
-  /// refined and verified at once, before the next view (0: not). With try_half_turns.
+  /// A view's best pose that fails verification only by its free-space conflicts, with at most this
+  /// share (looser than verify.max_conflict_fraction), is most often the object the wrong way round
+  /// (a jug with its handle behind): its half turns are refined and verified at once, before the next
+  /// view (0: not). With try_half_turns.
   double near_miss_conflict_fraction = 0.15;
-  /// Databases of at most this many objects are prepared for ICP when the recognizer is made (about
-  /// 0.1 s an object), so that the first frames run as fast as the rest; larger ones object by
-  /// object as scenes suggest them (the first hypotheses of an object then cost a few milliseconds
-  /// more while its nearest-point grid fills). Either way the results are the same.
-  std::size_t prepare_objects_up_to = 16;
-  /// Refine and verify independent hypotheses (a view's CRH rolls, the half turns) on several
-  /// threads, taken in order afterwards: the result is the same either way.
-  bool parallel_hypotheses = true;
   /// Report a symmetric object's pose in one canonical form among its equivalent ones (rotation
   /// nearest the camera's axes), so that a box or a can does not flip from frame to frame.
   bool canonical_poses = true;
-  double max_cluster_size_factor = 1.5;  ///< clusters wider than this x the largest object are skipped
-  /// A cluster in which nothing passes is split at concave creases and steps (objects standing
-  /// against each other) and each convex part is tried on its own.
-  bool split_touching = true;
-  ConvexSegmentOptions split;
+  /// The frame as a whole (pose/scene_claims.hpp): of detections that explain the same pixels,
+  /// the more confident is kept; one whose evidence another already explains is dropped.
+  bool resolve_scene_claims = true;
+  SceneClaimOptions scene_claims{};
+  /// Called in order, on the calling thread, for every hypothesis that passed verification's bounds,
+  /// before the confidence threshold: what the confidence model is fit on (viewpose bop --hypotheses).
+  std::function<void(const VerifiedHypothesis&)> on_verified{};
+};
+
+/// Touching objects: a region in which nothing passes is split at concave creases and steps
+/// (segment/convex_segments) and each convex part tried on its own; once something is found, its
+/// points are explained away and what is left of the region is tried again.
+struct SplitOptions {
+  bool enabled = true;
+  ConvexSegmentOptions parts{};
   /// Regions wider than this x the largest object are not split: two objects side by side are at most
   /// twice as wide as the largest.
-  double max_split_size_factor = 2.0;
-  int max_split_depth = 2;  ///< how many times what is left of a cluster may be split again
-  /// A convex part is a small patch and weaker evidence than a whole cluster: a pose found in one
-  /// may leave at most this share of the model's unhidden pixels unmeasured. Measured on the real
-  /// YCB-Video frames: true detections in parts 0.06 to 0.11; a foam brick fitted to a patch of a
-  /// monitor stand with half of it over a region with no depth, 0.46.
+  double max_size_factor = 2.0;
+  int max_depth = 2;  ///< how many times what is left of a region may be split again
+  /// A convex part is a small patch and weaker evidence than a whole cluster: a pose found in one is
+  /// verified with `verify` tightened to these bounds. Measured on the real YCB-Video frames: true
+  /// detections in parts leave 0.06 to 0.11 of the model's unhidden pixels unmeasured; a foam brick
+  /// fitted to a patch of a monitor stand with half of it over a region with no depth, 0.46.
   double part_max_unmeasured_fraction = 0.3;
   double part_min_inlier_fraction = 0.9;
   double part_min_cluster_explained = 0.9;
+};
+
+/// Time and threads.
+struct RunOptions {
   /// Stop trying poses once the frame has taken this long (0: no limit): what is verified by then
   /// is returned, and Recognition::cut_short says so. Checked between database views (a view's
   /// rolls run together), so a frame overruns it by at most one view's refinement, a few ms. A
   /// pose found in time is kept even if its half-turn check had to be left out.
   double deadline_ms = 0;
-  /// The frame as a whole (pose/scene_claims.hpp): of detections that explain the same pixels,
-  /// the more confident is kept; one whose evidence another already explains is dropped.
-  bool resolve_scene_claims = true;
-  SceneClaimOptions scene_claims;
+  /// Refine and verify independent hypotheses (a view's CRH rolls, the half turns) on several
+  /// threads, taken in order afterwards: the result is the same either way.
+  bool parallel_hypotheses = true;
+  /// Databases of at most this many objects are prepared for ICP when the recognizer is made (about
+  /// 0.1 s an object), so that the first frames run as fast as the rest; larger ones object by
+  /// object as scenes suggest them (the first hypotheses of an object then cost a few milliseconds
+  /// more while its nearest-point grid fills). Either way the results are the same.
+  std::size_t prepare_objects_up_to = 16;
+};
+
+/// Everything a Recognizer can be told, by stage. (Every member has a default initializer, so that
+/// designated initializers may name only what they change.) The defaults are what the measurements in
+/// docs/RESULTS.md were made with; most programs change at most accept.min_confidence, split.enabled
+/// and run.deadline_ms:
+///   Recognizer r(db, {.accept = {.min_confidence = 0.8}, .run = {.deadline_ms = 30}});
+/// What the database fixes is taken from it: the voxel size scenes are described at (segment.voxel_m
+/// must be left as it is or equal the database's) and the ICP copy's (DatabaseParams::icp_voxel_m).
+struct RecognizerOptions {
+  SegmentOptions segment{};
+  MatchOptions match{};
+  IcpOptions icp{};
+  VerifyOptions verify{};
+  /// Verification draws each object's mesh simplified to within this (0: the mesh as it is). CAD and
+  /// scanned meshes hold tens of thousands of triangles where a few hundred draw the same depth to
+  /// within 2 mm, two fifths of the smallest depth tolerance; drawing was most of a real frame's time.
+  float verify_mesh_error_m = 0.002f;
+  AcceptOptions accept{};
+  SplitOptions split{};
+  RunOptions run{};
 };
 
 struct Detection {
@@ -171,6 +199,29 @@ class Recognizer {
   // Describe, match, align, refine and verify one cluster; the first (or best) accepted pose.
   std::optional<Detection> recognize_cluster(const PointCloud& points, const Frame& frame, const VerifyOptions& verify,
                                              Recognition& out) const;
+  struct Refined;
+  // What every view tried for one region needs: its description, its nearest views, its ICP copy,
+  // and the bounds its poses are verified with.
+  struct Region {
+    Description description;
+    std::vector<Match> matches;
+    std::vector<Eigen::Vector3f> icp_source;
+    double smallest_diameter = 0;  // objects narrower than this cannot explain the region
+    VerifyOptions verify;
+    VerifyOptions near_miss;  // verify with the looser conflict bound of a pose the wrong way round
+    bool try_near_misses = false;
+  };
+  // The region described and matched; nullopt when it has too few points with normals.
+  std::optional<Region> describe_region(const PointCloud& points, const Frame& frame, const VerifyOptions& verify,
+                                        Recognition& out) const;
+  // The poses the view at `rank` gives, refined and verified: the first accepted (or the best).
+  std::optional<Detection> try_view(const Region& region, std::size_t rank, const Frame& frame, Recognition& out) const;
+  // Other objects among the matches after `rank` try a few views each; a higher score replaces `best`.
+  void challenge(const Region& region, std::size_t rank, Detection& best, const Frame& frame, Recognition& out) const;
+  // `best` turned half a turn about each of its axes; the best of the four is kept.
+  void turn_if_better(const Region& region, Detection& best, const Frame& frame, Recognition& out) const;
+  std::vector<Transform> half_turns(const Transform& T_camera_object, std::uint32_t object) const;
+  Detection detection_from(const Refined& h, const Region& region, std::size_t rank, float roll_deg) const;
   // A cluster, or what is left of one: recognized whole, else split into convex parts; once a part
   // is recognized, its object's points are taken away and the rest recognized again (depth + 1).
   void recognize_region(const PointCloud& points, const Frame& frame, Recognition& out, int depth) const;

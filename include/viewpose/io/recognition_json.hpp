@@ -1,0 +1,14 @@
+#pragma once
+// A frame's recognition as JSON, as `viewpose recognize --json` writes it (and `bop --details` and
+// `live --json-lines` a line per frame): each detection's object, pose (R row-major, t_m in metres),
+// score and verification evidence; the frame's counts; with `with_times`, each stage's time in ms.
+// Callers add keys of their own (the scene's name, the frame's index) before writing it.
+#include <nlohmann/json.hpp>
+
+#include "viewpose/recognize/recognizer.hpp"
+
+namespace viewpose {
+
+nlohmann::json recognition_json(const Recognition& r, bool with_times = true);
+
+}  // namespace viewpose

@@ -1,0 +1,45 @@
+#include "viewpose/io/recognition_json.hpp"
+
+namespace viewpose {
+
+nlohmann::json recognition_json(const Recognition& r, bool with_times) {
+  nlohmann::json dets = nlohmann::json::array();
+  for (const Detection& d : r.detections) {
+    const Eigen::Matrix3d R = d.T_camera_object.linear();
+    const Eigen::Vector3d t = d.T_camera_object.translation();
+    dets.push_back({{"object_id", d.object_id}, {"object_name", d.object_name},
+                    {"R", {R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2)}},
+                    {"t_m", {t.x(), t.y(), t.z()}}, {"score", d.score}, {"icp_fitness", d.icp_fitness},
+                    {"icp_rmse_m", d.icp_rmse_m}, {"match_rank", d.match_rank}, {"roll_deg", d.roll_deg},
+                    {"cluster_points", d.cluster_points}, {"from_split_cluster", d.from_split_cluster},
+                    {"runner_up_score", d.runner_up_score},
+                    {"verification", {{"fit_score", d.verification.score},
+                                      {"inlier_fraction", d.verification.inlier_fraction},
+                                      {"conflict_fraction", d.verification.conflict_fraction},
+                                      {"cluster_explained", d.verification.cluster_explained},
+                                      {"model_support", d.verification.model_support},
+                                      {"visible_fraction", d.verification.visible_fraction},
+                                      {"unmeasured_fraction", d.verification.unmeasured_fraction},
+                                      {"mean_depth_m", d.verification.mean_depth_m},
+                                      {"outline_continuation", d.verification.outline_continuation},
+                                      {"outline", {{"continued", d.verification.outline_continued},
+                                                   {"stepped", d.verification.outline_stepped},
+                                                   {"in_front", d.verification.outline_in_front},
+                                                   {"unknown", d.verification.outline_unknown}}},
+                                      {"model_rms_m", d.verification.model_rms_m},
+                                      {"plane_rms_m", d.verification.plane_rms_m},
+                                      {"model_relief_m", d.verification.model_relief_m}}}});
+  }
+  nlohmann::json j = {{"detections", dets}, {"cut_short", r.cut_short}, {"clusters", r.clusters},
+                      {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses},
+                      {"dropped_as_explained", r.dropped_as_explained}};
+  if (with_times) {
+    const StageTimes& t = r.times;
+    j["times_ms"] = {{"downsample", t.downsample_ms}, {"segment", t.segment_ms}, {"normals", t.normals_ms},
+                     {"vfh", t.vfh_ms}, {"match", t.match_ms}, {"crh", t.crh_ms}, {"icp", t.icp_ms},
+                     {"verify", t.verify_ms}, {"split", t.split_ms}, {"total", t.total_ms}};
+  }
+  return j;
+}
+
+}  // namespace viewpose
