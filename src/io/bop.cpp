@@ -444,6 +444,20 @@ std::string resolve_models_folder(const BopLayout& layout, std::string_view name
   return fs::is_directory(layout.root / "models", ec) ? std::string("models") : std::string();  // models_info.json alone
 }
 
+std::map<int, fs::path> find_bop_model_files(const fs::path& dir) {
+  std::map<int, fs::path> files;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return files;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string stem = entry.path().stem().string();
+    if (entry.path().extension() == ".ply" && stem.starts_with("obj_") && stem.size() > 4 && stem.size() <= 13 &&
+        all_digits(stem.substr(4))) {
+      files[std::stoi(stem.substr(4))] = entry.path();
+    }
+  }
+  return files;
+}
+
 BopDataset open_bop_dataset(const fs::path& root, std::string_view split_name, const BopOpenOptions& options) {
   std::error_code ec;
   const BopLayout layout = scan_bop_layout(root);
@@ -470,14 +484,7 @@ BopDataset open_bop_dataset(const fs::path& root, std::string_view split_name, c
   if (const fs::path p = models_dir / "models_info.json"; !ds.models_dir.empty() && fs::exists(p, ec)) {
     ds.models = parse_models_info(read_text(p), p.string(), &ds.notes);
   }
-  if (!ds.models_dir.empty() && fs::is_directory(models_dir, ec)) {
-    for (const auto& entry : fs::directory_iterator(models_dir)) {
-      const std::string stem = entry.path().stem().string();
-      if (entry.path().extension() == ".ply" && stem.starts_with("obj_") && all_digits(stem.substr(4))) {
-        ds.model_files[std::stoi(stem.substr(4))] = entry.path();
-      }
-    }
-  }
+  if (!ds.models_dir.empty() && fs::is_directory(models_dir, ec)) ds.model_files = find_bop_model_files(models_dir);
 
   std::vector<std::pair<int, fs::path>> scenes;
   for (const auto& entry : fs::directory_iterator(split_dir)) {

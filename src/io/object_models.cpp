@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
+#include "viewpose/io/bop.hpp"
 #include "viewpose/io/mesh_loader.hpp"
 #include "viewpose/io/ply.hpp"
 #include "viewpose/render/shapes.hpp"
@@ -36,13 +37,7 @@ LoadedObjectModels load_object_models(std::span<const std::string> models, Lengt
 
 std::vector<ObjectModel> load_bop_models(const fs::path& dir) {
   if (!fs::is_directory(dir)) throw Error(fmt::format("{}: not a folder of BOP models", dir.string()));
-  std::map<int, fs::path> files;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    const std::string stem = e.path().stem().string();
-    if (e.path().extension() != ".ply" || !stem.starts_with("obj_") || stem.size() != 10) continue;
-    if (!std::all_of(stem.begin() + 4, stem.end(), [](char c) { return c >= '0' && c <= '9'; })) continue;
-    files[std::stoi(stem.substr(4))] = e.path();
-  }
+  const std::map<int, fs::path> files = find_bop_model_files(dir);
   if (files.empty()) throw Error(fmt::format("{}: no obj_NNNNNN.ply models in it", dir.string()));
   std::vector<ObjectModel> out;
   for (const auto& [id, path] : files) {

@@ -157,6 +157,9 @@ struct BopOpenOptions {
   std::string models_dir = "models";
 };
 
+/// The obj_NNNNNN.ply files of a BOP models folder, by obj_id (none when the folder is absent).
+std::map<int, std::filesystem::path> find_bop_model_files(const std::filesystem::path& dir);
+
 /// Reads a split's json files and checks that every image's depth file exists. `split` is a split
 /// folder or a bare split name (resolve_bop_split). Throws viewpose::Error naming the first missing
 /// or malformed file.
