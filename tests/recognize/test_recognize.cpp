@@ -38,6 +38,15 @@ const ViewDatabase& jug_db() {
   return db;
 }
 
+// Image `image` of the seed experiment's jug at 1 m in `orientations` orientations (seed 21).
+Frame jug_at_one_metre(int orientations, std::size_t image, const SensorModel& sensor, std::uint64_t noise_seed) {
+  SeedExperimentOptions setup;
+  setup.distances_m = {1.0};
+  setup.orientations = orientations;
+  const SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, setup, 21);
+  return frame_from_depth(simulate_image(ds, ds.scenes[0].images[image], sensor, noise_seed).depth, K);
+}
+
 TEST(Recognize, NoiseFreeJugAtOneMetreWithinFiveMillimetresAndTwoDegrees) {
   const Recognizer recognizer(jug_db());
   SeedExperimentOptions setup;
@@ -59,11 +68,7 @@ TEST(Recognize, NoiseFreeJugAtOneMetreWithinFiveMillimetresAndTwoDegrees) {
 TEST(Recognize, ARecognizerKeepsTheDatabaseItIsGivenOrShares) {
   // `Recognizer r(ViewDatabase::load(path))` once kept a reference to the temporary: the database it
   // is handed (moved in, or shared) must live as long as the recognizer, and give the same answer.
-  SeedExperimentOptions setup;
-  setup.distances_m = {1.0};
-  setup.orientations = 1;
-  const SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, setup, 21);
-  const Frame frame = frame_from_depth(simulate_image(ds, ds.scenes[0].images[0], SensorModel::ideal(), 1).depth, K);
+  const Frame frame = jug_at_one_metre(1, 0, SensorModel::ideal(), 1);
   const Recognition borrowed = Recognizer(jug_db()).recognize(frame);
   ASSERT_EQ(borrowed.detections.size(), 1u);
 
@@ -96,11 +101,7 @@ TEST(Recognize, OptionsAreGivenByStageAndTheDatabaseFixesTheVoxelSize) {
 }
 
 TEST(Recognize, ADeadlineCutsTheFrameShortAndSaysSo) {
-  SeedExperimentOptions setup;
-  setup.distances_m = {1.0};
-  setup.orientations = 2;
-  const SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, setup, 21);
-  const Frame frame = frame_from_depth(simulate_image(ds, ds.scenes[0].images[1], SensorModel::kinect_v1(), 3).depth, K);
+  const Frame frame = jug_at_one_metre(2, 1, SensorModel::kinect_v1(), 3);
   const Recognition full = Recognizer(jug_db()).recognize(frame);
   ASSERT_EQ(full.detections.size(), 1u);
   EXPECT_FALSE(full.cut_short);
