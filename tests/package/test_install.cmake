@@ -43,6 +43,13 @@ if(NOT out MATCHES "mug")
   message(FATAL_ERROR "the database build_database wrote holds no mug:\n${out}")
 endif()
 
+# live_camera on a recording (no camera here): a simulated frame of the mug, replayed.
+run(${prefix}/bin/viewpose simulate --preset seed-experiment --model mug --orientations 1 --distances 0.8 -o ${WORK}/mug_frames)
+run(${WORK}/examples/live_camera ${WORK}/mug.vpdb recording:${WORK}/mug_frames/test/000001)
+if(NOT out MATCHES "mug  score")
+  message(FATAL_ERROR "live_camera found no mug in the recording:\n${out}")
+endif()
+
 # A version that does not match is refused by find_package.
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE}/tests/package/subdirectory -B ${WORK}/wrong_version
                 -DCMAKE_PREFIX_PATH=${prefix} -DVIEWPOSE_SOURCE=${SOURCE} -DWANT_VERSION=99.0
