@@ -12,32 +12,31 @@ namespace {
 constexpr float kMillimetreDiagonal = 10.0f;
 }  // namespace
 
-double metres_per_unit(LengthUnit unit) {
-  switch (unit) {
-    case LengthUnit::Millimetres: return 0.001;
-    case LengthUnit::Centimetres: return 0.01;
-    case LengthUnit::Metres: break;
-  }
-  return 1.0;
+namespace {
+
+// Each unit once: its size, its symbol and its name.
+struct UnitRow {
+  LengthUnit unit;
+  double metres;
+  std::string_view symbol, name;
+};
+constexpr UnitRow kUnits[] = {{LengthUnit::Metres, 1.0, "m", "metres"},
+                              {LengthUnit::Millimetres, 0.001, "mm", "millimetres"},
+                              {LengthUnit::Centimetres, 0.01, "cm", "centimetres"}};
+
+const UnitRow& row(LengthUnit unit) {
+  for (const UnitRow& r : kUnits)
+    if (r.unit == unit) return r;
+  return kUnits[0];
 }
 
-std::string_view to_string(LengthUnit unit) {
-  switch (unit) {
-    case LengthUnit::Millimetres: return "mm";
-    case LengthUnit::Centimetres: return "cm";
-    case LengthUnit::Metres: break;
-  }
-  return "m";
-}
+}  // namespace
 
-std::string_view unit_name(LengthUnit unit) {
-  switch (unit) {
-    case LengthUnit::Millimetres: return "millimetres";
-    case LengthUnit::Centimetres: return "centimetres";
-    case LengthUnit::Metres: break;
-  }
-  return "metres";
-}
+double metres_per_unit(LengthUnit unit) { return row(unit).metres; }
+
+std::string_view to_string(LengthUnit unit) { return row(unit).symbol; }
+
+std::string_view unit_name(LengthUnit unit) { return row(unit).name; }
 
 LengthUnit parse_length_unit(std::string_view text) {
   if (text == "m" || text == "metres" || text == "meters") return LengthUnit::Metres;
