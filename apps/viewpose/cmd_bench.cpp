@@ -3,8 +3,15 @@
 // --dataset on a BOP split against a given database. Prints median, 90th and 95th percentile and
 // the frames per second; with ground truth also how many poses were right, so that speed is never
 // bought with accuracy unseen.
+#include <sys/prctl.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <optional>
 
 #include <algorithm>
 #include <cmath>
@@ -24,6 +31,7 @@
 #include "viewpose/core/threads.hpp"
 #include "viewpose/eval/metrics.hpp"
 #include "viewpose/io/bop.hpp"
+#include "viewpose/io/scene_file.hpp"
 #include "viewpose/core/file.hpp"
 #include "viewpose/recognize/recognizer.hpp"
 #include "viewpose/render/shapes.hpp"
@@ -34,11 +42,40 @@ namespace viewpose::cli {
 
 namespace {
 
-// A frame as the camera delivers it: its conversion to a cloud is timed with the rest.
+// A frame as the camera delivers it: its conversion to a cloud is timed with the rest. A scene file
+// (a PCD or PLY cloud) comes as a frame already made, as `viewpose recognize` makes it.
 struct BenchFrame {
   DepthImage depth;
   CameraIntrinsics K;
   std::vector<GroundTruthPose> gt;
+  std::optional<Frame> ready;
+};
+
+// N processes that do nothing but spin, for as long as this lives: the machine a robot's computer
+// is, with other work on its cores. They die with their parent (PR_SET_PDEATHSIG), killed or not.
+class BusyProcesses {
+ public:
+  explicit BusyProcesses(int n) {
+    for (int i = 0; i < n; ++i) {
+      const pid_t pid = fork();
+      if (pid < 0) throw Error(fmt::format("bench: --load: cannot start a busy process: {}", std::strerror(errno)));
+      if (pid == 0) {
+        prctl(PR_SET_PDEATHSIG, SIGKILL);
+        volatile std::uint64_t spin = 0;
+        for (;;) spin = spin + 1;
+      }
+      pids_.push_back(pid);
+    }
+  }
+  ~BusyProcesses() {
+    for (const pid_t pid : pids_) kill(pid, SIGKILL);
+    for (const pid_t pid : pids_) waitpid(pid, nullptr, 0);
+  }
+  BusyProcesses(const BusyProcesses&) = delete;
+  BusyProcesses& operator=(const BusyProcesses&) = delete;
+
+ private:
+  std::vector<pid_t> pids_;
 };
 
 // The setting: one object at 0.75-1.50 m, turned to evenly spaced yaws at each distance.
@@ -54,7 +91,7 @@ std::vector<BenchFrame> seed_frames(const ObjectModel& object, int count) {
     for (const SimScene& scene : scenes.scenes) {
       if (frames.size() >= static_cast<std::size_t>(count)) break;
       const SimulatedFrame f = simulate_image(scenes, scene.images[k], SensorModel::kinect_v1(), 100 * scene.scene_id + k);
-      frames.push_back({f.depth, K, f.gt});
+      frames.push_back({f.depth, K, f.gt, {}});
     }
   }
   return frames;
@@ -88,7 +125,8 @@ double peak_rss_mib() {
 void add_bench_command(CLI::App& app, int& exit_code) {
   struct Options {
     std::string dataset, split = "test", models_dir = "models", db, json;
-    int frames = 100, objects = 1, distinct = 0, block = 0;
+    std::vector<std::string> scenes;
+    int frames = 100, objects = 1, distinct = 0, block = 0, load = 0;
     double deadline_ms = 0;
     bool no_split = false;
   };
@@ -100,6 +138,15 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--dataset", o->dataset, "BOP dataset folder (default: a generated seed experiment of the built-in jug)")
       ->check(CLI::ExistingDirectory);
+  cmd->add_option("--scene", o->scenes,
+                  "Scene files (PCD or PLY clouds; repeat, or give several) to run instead of a dataset, with --db; "
+                  "no ground truth, so every detection is reported, not scored")
+      ->check(CLI::ExistingFile)
+      ->excludes("--dataset");
+  cmd->add_option("--load", o->load,
+                  "Start this many busy processes of its own for the timed frames: the pipeline's times on a machine "
+                  "that is doing other things")
+      ->check(CLI::Range(0, 64));
   cmd->add_option("--split", o->split, "Split folder")->capture_default_str();
   cmd->add_option("--models-dir", o->models_dir, "Folder of models_info.json, under the dataset")->capture_default_str();
   cmd->add_option("--db", o->db, "View database (required with --dataset; default: built from the jug in this run)")
@@ -121,13 +168,24 @@ void add_bench_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--json", o->json, "Also write the numbers as JSON to this file");
   cmd->callback([o, &exit_code] {
     if (!o->dataset.empty() && o->db.empty()) throw Error("bench: --dataset needs --db");
+    if (!o->scenes.empty() && o->db.empty()) throw Error("bench: --scene needs --db");
     ViewDatabase db;
-    double db_build_ms = 0;
+    double db_build_ms = 0, db_load_ms = 0;
     std::vector<BenchFrame> frames;
     std::string source;
     // The frames made (or read): all of them, or with --distinct that many, cycled through.
     const int to_make = o->distinct > 0 ? std::min(o->distinct, o->frames) : o->frames;
-    if (o->dataset.empty()) {
+    if (!o->scenes.empty()) {
+      const auto t = Clock::now();
+      db = ViewDatabase::load(o->db);
+      db_load_ms = ms_since(t);
+      for (std::size_t i = 0; i < o->scenes.size() && frames.size() < static_cast<std::size_t>(to_make); ++i) {
+        SceneFile scene = load_scene_file(o->scenes[i], std::nullopt);
+        for (const auto& w : scene.warnings) fmt::print(stderr, "viewpose: warning: {}: {}\n", o->scenes[i], w);
+        frames.push_back({{}, scene.frame.K, {}, std::move(scene.frame)});
+      }
+      source = fmt::format("{} scene file{}", frames.size(), frames.size() == 1 ? "" : "s");
+    } else if (o->dataset.empty()) {
       const ObjectModel jug{1, "jug", make_jug()};
       const auto t = Clock::now();
       db = o->db.empty() ? build_view_database(std::span(&jug, 1), DatabaseParams{}) : ViewDatabase::load(o->db);
@@ -136,13 +194,15 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       frames = seed_frames(jug, to_make);
       source = "seed experiment (jug, 0.75-1.50 m, simulated Kinect v1)";
     } else {
+      const auto t = Clock::now();
       db = ViewDatabase::load(o->db);
+      db_load_ms = ms_since(t);
       const BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
       for (const auto& note : ds.notes) fmt::print(stderr, "viewpose: note: {}\n", note);
       const std::size_t n = std::min(ds.images.size(), static_cast<std::size_t>(to_make));
       for (std::size_t i = 0; i < n; ++i) {
         const BopFrame bf = load_bop_frame(ds.images[i]);
-        frames.push_back({bf.depth, bf.K, ds.images[i].gt});
+        frames.push_back({bf.depth, bf.K, ds.images[i].gt, {}});
       }
       source = fmt::format("{} ({}, {} images)", o->dataset, o->split, n);
     }
@@ -178,15 +238,24 @@ void add_bench_command(CLI::App& app, int& exit_code) {
     per_hypothesis_ms.reserve(runs);
     match_per_region_ms.reserve(runs);
     nlohmann::json blocks = nlohmann::json::array();
+    std::size_t detections = 0;
     {
+      const BusyProcesses load(o->load);
       ProgressBar bar("bench", runs);
       for (std::size_t run = 0; run < runs; ++run) {
         const std::size_t i = run % frames.size();
-        DepthImage depth = frames[i].depth;  // as a camera hands over a fresh buffer
-        const auto start = Clock::now();
-        const Frame frame = frame_from_depth(std::move(depth), frames[i].K);
-        const double frame_ms = ms_since(start);
-        const Recognition r = recognizer.recognize(frame);
+        Recognition r;
+        double frame_ms = 0;
+        if (frames[i].ready) {
+          r = recognizer.recognize(*frames[i].ready);
+        } else {
+          DepthImage depth = frames[i].depth;  // as a camera hands over a fresh buffer
+          const auto start = Clock::now();
+          const Frame frame = frame_from_depth(std::move(depth), frames[i].K);
+          frame_ms = ms_since(start);
+          r = recognizer.recognize(frame);
+        }
+        detections += r.detections.size();
         const StageTimes& t = r.times;
         const double values[] = {frame_ms, t.downsample_ms, t.segment_ms, t.normals_ms, t.vfh_ms, t.match_ms,
                                  t.crh_ms,   t.icp_ms,        t.verify_ms,  t.split_ms,     t.total_ms + frame_ms};
@@ -235,10 +304,12 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       return s;
     }();
     const double fps = static_cast<double>(runs) / total_s;
-    fmt::print("{}: {} frames{}, {} thread{}, database of {} objects x {} views\n", source, runs,
+    fmt::print("{}: {} frames{}, {} thread{}{}, database of {} objects x {} views\n", source, runs,
                runs > frames.size() ? fmt::format(" ({} distinct, cycled)", frames.size()) : std::string(), thread_count(),
-               thread_count() == 1 ? "" : "s", db.objects.size(), db.views.size());
+               thread_count() == 1 ? "" : "s", o->load > 0 ? fmt::format(", {} busy processes beside", o->load) : std::string(),
+               db.objects.size(), db.views.size());
     if (db_build_ms > 0) fmt::print("database build: {:.0f} ms\n", db_build_ms);
+    if (db_load_ms > 0) fmt::print("database loaded in {:.1f} ms\n", db_load_ms);
     fmt::print("recognizer made in {:.0f} ms\n", prepare_ms);
     fmt::print("{:<12} {:>9} {:>9} {:>9} {:>9} {:>9}\n", "stage (ms)", "median", "p90", "p95", "max", "mean");
     nlohmann::json jstages;
@@ -254,6 +325,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                  match_per_region = percentile(match_per_region_ms, 0.5);
     fmt::print("{:.1f} frames per second; {:.0f} hypotheses per frame (median), ICP + verify {:.2f} ms per hypothesis, "
                "matching {:.2f} ms per cluster (medians)\n", fps, hyp_med, per_hyp, match_per_region);
+    if (!o->scenes.empty()) fmt::print("detections: {} in {} frames (no ground truth)\n", detections, runs);
     if (targets > 0) {
       fmt::print("poses right (ADD-S < 10 % of the diameter): {} of {} ({:.1f} %), the right way round too (ADD): {}; "
                  "wrong detections: {}\n", found, targets, 100.0 * static_cast<double>(found) / static_cast<double>(targets),
@@ -267,7 +339,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
     if (!o->json.empty()) {
       const nlohmann::json j = {{"source", source}, {"frames", runs}, {"distinct_frames", frames.size()}, {"blocks", blocks}, {"threads", thread_count()},
                                 {"objects", db.objects.size()}, {"views", db.views.size()},
-                                {"db_build_ms", db_build_ms}, {"prepare_ms", prepare_ms}, {"stages_ms", jstages}, {"fps", fps},
+                                {"db_build_ms", db_build_ms}, {"db_load_ms", db_load_ms}, {"prepare_ms", prepare_ms}, {"load_processes", o->load}, {"detections", detections}, {"stages_ms", jstages}, {"fps", fps},
                                 {"hypotheses_median", hyp_med}, {"icp_verify_per_hypothesis_ms", per_hyp}, {"match_per_cluster_ms", match_per_region},
                                 {"targets", targets}, {"right", found}, {"right_add", found_add}, {"wrong", wrong}, {"failed_frames", failed_frames}, {"cut_short", cut_short},
                                 {"peak_rss_mib", rss}};
