@@ -279,6 +279,10 @@ string(JSON bench_load GET "${bench_json}" load_processes)
 if(NOT bench_load EQUAL 1)
   message(FATAL_ERROR "bench JSON: load_processes ${bench_load}")
 endif()
+# ... and over a depth PNG with its camera, read as recognize reads it.
+run(TRUE bench --scene "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json" --db "${WORK}/jug.vpdb"
+    --frames 1)
+expect_in("${OUT}" "detections: 1 in 1 frames (no ground truth)")
 run(FALSE bench --scene "${WORK}/al.ply")
 expect_in("${ERR}" "bench: --scene needs --db")
 file(WRITE "${WORK}/truncated.csv" "scene_id,im_id,obj_id,score,R,t,time\n1,0,1,0.9,1 0 0")
