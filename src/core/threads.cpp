@@ -1,6 +1,7 @@
 #include "viewpose/core/threads.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 
 #include <omp.h>
 
@@ -9,5 +10,12 @@ namespace viewpose {
 void set_thread_count(int threads) { omp_set_num_threads(std::max(1, threads)); }
 
 int thread_count() { return omp_get_max_threads(); }
+
+std::string openmp_wait() {
+  std::string said;
+  for (const char* name : {"OMP_WAIT_POLICY", "GOMP_SPINCOUNT"})
+    if (const char* value = std::getenv(name)) said += (said.empty() ? "" : ", ") + std::string(name) + "=" + value;
+  return said.empty() ? "libgomp's default (spin 300000)" : said;
+}
 
 }  // namespace viewpose

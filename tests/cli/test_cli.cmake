@@ -23,6 +23,23 @@ endfunction()
 run(TRUE --version)
 expect_in("${OUT}" "0.")
 
+# The command gives OpenMP a short spin before idle threads sleep (apps/viewpose/openmp_wait.cpp), as
+# libgomp itself reports it; a user's own choice is kept.
+unset(ENV{GOMP_SPINCOUNT})
+unset(ENV{OMP_WAIT_POLICY})
+set(ENV{OMP_DISPLAY_ENV} verbose)
+run(TRUE --version)
+expect_in("${ERR}" "GOMP_SPINCOUNT = '1000'")
+set(ENV{GOMP_SPINCOUNT} 7)
+run(TRUE --version)
+expect_in("${ERR}" "GOMP_SPINCOUNT = '7'")
+unset(ENV{GOMP_SPINCOUNT})
+set(ENV{OMP_WAIT_POLICY} passive)
+run(TRUE --version)
+expect_in("${ERR}" "GOMP_SPINCOUNT = '0'")
+unset(ENV{OMP_WAIT_POLICY})
+unset(ENV{OMP_DISPLAY_ENV})
+
 # The demo recognizes the jug in simulated frames and prints poses beside the truth.
 run(TRUE demo --orientations 1 --out "${WORK}/demo")
 expect_in("${OUT}" "found 5 of 5")
