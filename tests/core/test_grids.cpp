@@ -54,6 +54,41 @@ TEST(NearestGrid, FindsAPointAtMostACellDiagonalFartherThanTheNearest) {
   EXPECT_LT(mean / compared, 0.1 * cell);
 }
 
+TEST(NearestGrid, FillingEveryCellAtOnceGivesEachItsExactNearestPoint) {
+  // fill_all searches block by block; each cell must still hold a point exactly as near the cell's
+  // centre as the tree's nearest to it (what the cell's own search would store). A sparse sphere
+  // and a dense patch beside it, as a scanned view has.
+  std::vector<Eigen::Vector3f> pts = sphere_points(3000, 3);
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<float> u(-0.02f, 0.02f);
+  for (int i = 0; i < 4000; ++i) pts.emplace_back(0.1f + u(rng), u(rng), 0.5f * u(rng));
+  const float cell = 0.003f, margin = 0.02f;
+  const KdTree tree(pts);
+  const NearestGrid grid(tree, pts, cell, margin);
+  grid.fill_all();
+  const std::size_t all = grid.filled();
+  // The grid's origin, as the class documents it: the finite points' lower corner less the margin.
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e9f);
+  for (const auto& p : pts)
+    if (p.allFinite()) lo = lo.cwiseMin(p);
+  const Eigen::Vector3f origin = lo - Eigen::Vector3f::Constant(margin);
+  std::mt19937_64 qrng(5);
+  std::uniform_real_distribution<float> q(-0.13f, 0.14f);
+  int checked = 0;
+  for (int i = 0; i < 30000; ++i) {
+    const Eigen::Vector3f p(q(qrng), q(qrng), q(qrng));
+    std::uint32_t held = 0, exact = 0;
+    float unused = 0, d_exact = 0;
+    if (!grid.nearest(p, held, unused)) continue;
+    const Eigen::Vector3f centre = origin + (((p - origin) / cell).array().floor() + 0.5f).matrix() * cell;
+    ASSERT_TRUE(tree.nearest(centre, exact, d_exact));
+    ASSERT_NEAR((pts[held] - centre).squaredNorm(), d_exact, 1e-9f) << "cell at " << centre.transpose();
+    ++checked;
+  }
+  EXPECT_GT(checked, 5000);
+  EXPECT_EQ(grid.filled(), all) << "queries after fill_all fill nothing new";
+}
+
 TEST(NearestGrid, EmptyOrNonFinitePointsFindNothingAndBadSizesThrow) {
   const std::vector<Eigen::Vector3f> none;
   std::uint32_t i = 0;
