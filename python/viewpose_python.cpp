@@ -161,6 +161,7 @@ PYBIND11_MODULE(viewpose, m) {
       .def_readonly("cut_short", &Recognition::cut_short)
       .def_readonly("clusters", &Recognition::clusters)
       .def_readonly("hypotheses", &Recognition::hypotheses)
+      .def_readonly("repeats", &Recognition::repeats)
       .def_property_readonly("times_ms",
                              [](const Recognition& r) {
                                const StageTimes& t = r.times;

@@ -217,8 +217,18 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const T
                                                                std::uint32_t object,
                                                                std::span<const Eigen::Vector3f> icp_source,
                                                                std::span<const Eigen::Vector3f> cluster, const Frame& frame,
-                                                               const VerifyOptions& verify, StageTimes& times) const {
+                                                               const VerifyOptions& verify, StageTimes& times,
+                                                               std::span<const Transform> refused) const {
   std::vector<Refined> out(T_camera_object_initial.size());
+  const double same_cos = std::cos(options_.match.refused_rotation_deg * M_PI / 180.0);
+  const auto is_refused = [&](const Transform& T) {
+    if (!(options_.match.refused_rotation_deg > 0)) return false;
+    return std::any_of(refused.begin(), refused.end(), [&](const Transform& U) {
+      // cos of the angle between the two rotations: (trace(R_T^T R_U) - 1) / 2
+      return ((T.linear().transpose() * U.linear()).trace() - 1) / 2 >= same_cos &&
+             (T.translation() - U.translation()).norm() <= options_.match.refused_translation_m;
+    });
+  };
   const IcpTarget& target = icp_target(object);
   const VerifyModel model = verify_model(object);
   const auto start = Clock::now();
@@ -231,6 +241,10 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const T
     h.icp_ms = ms_since(t);
     h.T_camera_object = h.icp.T_target_source.inverse();
     if (h.icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
+    if (is_refused(h.T_camera_object)) {
+      h.repeat = true;
+      continue;
+    }
     t = Clock::now();
     h.v = verify_pose(model, h.T_camera_object, frame.depth, frame.K, cluster, verify);
     h.verify_ms = ms_since(t);
@@ -257,7 +271,7 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const T
 std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& points, const Frame& frame,
                                                               const VerifyOptions& verify, Recognition& out) const {
   DescribeTimes dt;
-  Region region{describe(points, db_.params.describe, &dt), {}, {}, 0.0, verify, verify, false};
+  Region region{describe(points, db_.params.describe, &dt), {}, {}, 0.0, verify, verify, false, std::vector<std::vector<Transform>>(db_.objects.size())};
   out.times.normals_ms += dt.normals_ms;
   out.times.vfh_ms += dt.vfh_ms;
   out.times.crh_ms += dt.crh_ms;
@@ -328,13 +342,16 @@ std::optional<Detection> Recognizer::try_view(const Region& region, std::size_t 
   }
   // All rolls at once on the threads there are; then taken in order, as one after the other would.
   const std::vector<Refined> refined =
-      refine_and_verify(initial, view.object, region.icp_source, d.cloud.points, frame, region.verify, out.times);
+      refine_and_verify(initial, view.object, region.icp_source, d.cloud.points, frame, region.verify, out.times,
+                        region.refused[view.object]);
   const Refined* nearest_miss = nullptr;
   std::size_t nearest_miss_roll = 0;
   for (std::size_t k = 0; k < refined.size(); ++k) {
     const Refined& h = refined[k];
     ++out.hypotheses;
+    if (h.repeat) ++out.repeats;
     if (!h.verified) continue;
+    if (!h.accepted) region.refused[view.object].push_back(h.T_camera_object);
     if (!h.v.accepted) {
       if (region.try_near_misses && passes(h.v, region.near_miss) && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
         nearest_miss = &h;

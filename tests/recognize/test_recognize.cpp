@@ -208,19 +208,38 @@ TEST(Regression, SeedExperimentEightOrientationsKeepsItsScores) {
   EXPECT_EQ(false_positives, 0);
 }
 
-TEST(Recognize, FrameWithNoKnownObjectGivesNoDetection) {
-  // A can and a mug on the table, but a database of the jug only.
+// A can and a mug on the table at 1 m, neither of them in jug_db().
+SimulatedFrame can_and_mug_frame() {
   SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", make_jug()}, K, {{1.0}, 1, 0.45, 18.0}, 1);
   ds.objects = {{7, "can", make_can()}, {8, "mug", make_mug()}};
   const Transform& T = ds.scenes[0].images[0].objects[0].T_camera_object;
   const Transform left = T * make_transform(Eigen::Matrix3d::Identity(), {-0.12, 0, -0.09});
   const Transform right = T * make_transform(Eigen::Matrix3d::Identity(), {0.12, 0, -0.1});
-  const SimulatedFrame f = simulate_image(ds, SimImage{{{0, left}, {1, right}}}, SensorModel::kinect_v1(), 5);
+  return simulate_image(ds, SimImage{{{0, left}, {1, right}}}, SensorModel::kinect_v1(), 5);
+}
+
+TEST(Recognize, FrameWithNoKnownObjectGivesNoDetection) {
+  // A can and a mug on the table, but a database of the jug only.
+  const SimulatedFrame f = can_and_mug_frame();
   ASSERT_GT(f.gt_info[0].px_count_visib, 500);
   ASSERT_GT(f.gt_info[1].px_count_visib, 500);
   const Recognition r = Recognizer(jug_db()).recognize(frame_from_depth(f.depth, K));
   EXPECT_GE(r.clusters, 2u);
   EXPECT_TRUE(r.detections.empty()) << r.detections.size() << " detections, first " << r.detections[0].object_name;
+}
+
+TEST(Recognize, PosesRefinedOntoOnesAlreadyRefusedAreNotVerifiedAgain) {
+  // Where nothing is known, every view of every match is refined, and many land on the same few
+  // poses: those are refused once. Verifying them all again must find nothing more.
+  const Frame frame = frame_from_depth(can_and_mug_frame().depth, K);
+  RecognizerOptions every;
+  every.match.refused_rotation_deg = 0;
+  const Recognition skipping = Recognizer(jug_db()).recognize(frame), verifying = Recognizer(jug_db(), every).recognize(frame);
+  EXPECT_TRUE(skipping.detections.empty());
+  EXPECT_TRUE(verifying.detections.empty());
+  EXPECT_EQ(verifying.repeats, 0u);
+  EXPECT_GT(skipping.repeats, 0u) << "of " << skipping.hypotheses;
+  EXPECT_EQ(skipping.hypotheses, verifying.hypotheses) << "the same poses are refined";
 }
 
 // The jug 1 m away on the table (the seed experiment's first frame), and a dataset whose objects

@@ -54,6 +54,11 @@ struct MatchOptions {
   /// up to this many of its views, and the higher verification score wins (0: the first pass stands).
   std::size_t challenger_views = 3;
   double max_region_size_factor = 1.5;  ///< regions wider than this x the largest object are not tried
+  /// Many views and rolls of a region refine to the same pose. One that ICP brings within this
+  /// rotation and translation of a pose of the same object verification has already refused for the
+  /// region is not verified again, and is refused too (rotation 0: every one is verified).
+  double refused_rotation_deg = 2;
+  double refused_translation_m = 0.002;
 };
 
 /// Which verified poses become detections, and in what form.
@@ -174,6 +179,7 @@ struct Recognition {
   StageTimes times;
   std::size_t clusters = 0;
   std::size_t hypotheses = 0;  ///< poses refined and verified
+  std::size_t repeats = 0;  ///< of those, refined onto a pose already refused, and not verified again
   std::size_t split_clusters = 0;  ///< clusters in which nothing passed, tried again in convex parts
   std::size_t regions = 0;  ///< clusters, parts and remainders described and matched against the database
   /// Detections dropped because another, more confident one explains the same pixels.
@@ -211,6 +217,9 @@ class Recognizer {
     VerifyOptions verify;
     VerifyOptions near_miss;  // verify with the looser conflict bound of a pose the wrong way round
     bool try_near_misses = false;
+    // By object, the refined poses verification refused so far (try_view skips their repeats). A
+    // region's views are tried one after another, on the calling thread.
+    mutable std::vector<std::vector<Transform>> refused;
   };
   // The region described and matched; nullopt when it has too few points with normals.
   std::optional<Region> describe_region(const PointCloud& points, const Frame& frame, const VerifyOptions& verify,
@@ -240,6 +249,7 @@ class Recognizer {
     Transform T_camera_object = Transform::Identity();
     Verification v;
     bool verified = false;
+    bool repeat = false;  // not verified: ICP brought it onto a pose already refused
     double confidence = 0;  // pose_confidence(v), for those v passes
     bool accepted = false;  // v passes and the confidence reaches min_confidence
     double icp_ms = 0, verify_ms = 0;
@@ -248,7 +258,8 @@ class Recognizer {
   // the order given, so that what is made of them does not depend on the threads.
   std::vector<Refined> refine_and_verify(std::span<const Transform> T_camera_object_initial, std::uint32_t object,
                                          std::span<const Eigen::Vector3f> icp_source, std::span<const Eigen::Vector3f> cluster,
-                                         const Frame& frame, const VerifyOptions& verify, StageTimes& times) const;
+                                         const Frame& frame, const VerifyOptions& verify, StageTimes& times,
+                                         std::span<const Transform> refused = {}) const;
   // What ICP and verification need of an object, made on its first hypothesis: a database of a
   // thousand objects costs nothing for the objects a scene never suggests.
   struct PreparedObject {
