@@ -45,8 +45,8 @@ void NearestGrid::fill_all() const {
   if (!cells_) return;
   // Block by block (2 x 2 x 2 cells) instead of one tree search per cell: a scanned view of 30 cm
   // took 300 ms, now half that (larger blocks gather too many candidates from a dense scan). With q
-  // the block's centre, d the distance from q to its nearest point and h the distance from q to the block's farthest cell centre, every cell's nearest point lies
-  // within d + 2h of q (it is at most d + h from the cell, the cell at most h from q). So one nearest
+  // the block's centre, d the distance from q to its nearest point and h the distance from q to the
+  // block's farthest cell centre, every cell's nearest point lies within d + 2h of q (it is at most d + h from the cell, the cell at most h from q). So one nearest
   // and one radius search per block give every candidate, and the cells choose among them exactly as
   // their own searches would (ties aside: then either point is as near).
   constexpr std::uint32_t kBlock = 2;
