@@ -1,11 +1,9 @@
 #include "viewpose/core/nearest_grid.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
 #include <new>
-#include <vector>
 
 #include <fmt/format.h>
 
@@ -43,49 +41,17 @@ NearestGrid::NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> po
 
 void NearestGrid::fill_all() const {
   if (!cells_) return;
-  // Block by block (2 x 2 x 2 cells) instead of one tree search per cell: a scanned view of 30 cm
-  // took 300 ms, now half that (larger blocks gather too many candidates from a dense scan). With q
-  // the block's centre, d the distance from q to its nearest point and h the distance from q to the
-  // block's farthest cell centre, every cell's nearest point lies within d + 2h of q (it is at most d + h from the cell, the cell at most h from q). So one nearest
-  // and one radius search per block give every candidate, and the cells choose among them exactly as
-  // their own searches would (ties aside: then either point is as near).
-  constexpr std::uint32_t kBlock = 2;
-  const std::uint32_t bx = (nx_ + kBlock - 1) / kBlock, by = (ny_ + kBlock - 1) / kBlock, bz = (nz_ + kBlock - 1) / kBlock;
-  const auto blocks = static_cast<std::ptrdiff_t>(bx) * by * bz;
-  const auto cell_centre = [&](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    return Eigen::Vector3f(origin_ + (Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)) +
-                                      Eigen::Vector3f::Constant(0.5f)) * cell_);
-  };
-#pragma omp parallel
-  {
-    std::vector<std::uint32_t> candidates;
-#pragma omp for schedule(dynamic, 8)
-    for (std::ptrdiff_t b = 0; b < blocks; ++b) {
-      const auto block = static_cast<std::uint64_t>(b);
-      const auto x0 = static_cast<std::uint32_t>(block % bx) * kBlock, y0 = static_cast<std::uint32_t>(block / bx % by) * kBlock,
-                 z0 = static_cast<std::uint32_t>(block / (static_cast<std::uint64_t>(bx) * by)) * kBlock;
-      const std::uint32_t x1 = std::min(x0 + kBlock, nx_), y1 = std::min(y0 + kBlock, ny_), z1 = std::min(z0 + kBlock, nz_);
-      const Eigen::Vector3f first = cell_centre(x0, y0, z0), last = cell_centre(x1 - 1, y1 - 1, z1 - 1);
-      const Eigen::Vector3f q = 0.5f * (first + last);
-      const float h = 0.5f * (last - first).norm();
-      std::uint32_t nearest_to_q = 0;
-      float d2 = 0;
-      tree_->nearest(q, nearest_to_q, d2);
-      // A little more than d + 2h, so that rounding cannot leave a cell's nearest point out.
-      tree_->radius_search(q, (std::sqrt(d2) + 2 * h) * 1.0001f + 1e-6f, candidates);
-      for (std::uint32_t z = z0; z < z1; ++z)
-        for (std::uint32_t y = y0; y < y1; ++y)
-          for (std::uint32_t x = x0; x < x1; ++x) {
-            const Eigen::Vector3f c = cell_centre(x, y, z);
-            std::uint32_t best = nearest_to_q;
-            float best_d2 = (points_[best] - c).squaredNorm();
-            for (const std::uint32_t k : candidates) {
-              const float dk = (points_[k] - c).squaredNorm();
-              if (dk < best_d2) best_d2 = dk, best = k;
-            }
-            cells_[(static_cast<std::size_t>(z) * ny_ + y) * nx_ + x].store(best + 1, std::memory_order_relaxed);
-          }
-    }
+  const auto slices = static_cast<std::ptrdiff_t>(nz_);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::ptrdiff_t z = 0; z < slices; ++z) {
+    std::uint32_t index = 0;
+    float d2 = 0;
+    for (std::uint32_t y = 0; y < ny_; ++y)
+      for (std::uint32_t x = 0; x < nx_; ++x) {
+        const Eigen::Vector3f centre = origin_ + (Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)) +
+                                                  Eigen::Vector3f::Constant(0.5f)) * cell_;
+        nearest(centre, index, d2);
+      }
   }
 }
 

@@ -42,9 +42,8 @@ class NearestGrid {
   }
   /// Cells filled so far.
   std::size_t filled() const;
-  /// Fills every cell now (on all threads) with a point as near its centre as the one a query would
-  /// fill it with (the same point but for ties): the first queries then cost no search. About
-  /// 150 ms for a 30 cm object scanned at 1-2 mm.
+  /// Fills every cell now (on all threads), with what queries would fill them with: the first
+  /// queries then cost no search. Tens of milliseconds for an object of 30 cm.
   void fill_all() const;
 
  private:
