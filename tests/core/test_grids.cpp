@@ -55,9 +55,9 @@ TEST(NearestGrid, FindsAPointAtMostACellDiagonalFartherThanTheNearest) {
 }
 
 TEST(NearestGrid, FillingEveryCellAtOnceGivesEachItsExactNearestPoint) {
-  // fill_all searches block by block; each cell must still hold a point exactly as near the cell's
-  // centre as the tree's nearest to it (what the cell's own search would store). A sparse sphere
-  // and a dense patch beside it, as a scanned view has.
+  // However fill_all fills the cells (a faster way by blocks was tried), each must hold a point
+  // exactly as near the cell's centre as the tree's nearest to it (what the cell's own search would
+  // store). A sparse sphere and a dense patch beside it, as a scanned view has.
   std::vector<Eigen::Vector3f> pts = sphere_points(3000, 3);
   std::mt19937_64 rng(4);
   std::uniform_real_distribution<float> u(-0.02f, 0.02f);
