@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
+#include "viewpose/core/transform.hpp"
 #include "viewpose/database/matching.hpp"
 #include "viewpose/pose/confidence.hpp"
 #include "viewpose/render/simplify.hpp"
@@ -220,13 +221,11 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const T
                                                                const VerifyOptions& verify, StageTimes& times,
                                                                std::span<const Transform> refused) const {
   std::vector<Refined> out(T_camera_object_initial.size());
-  const double same_cos = std::cos(options_.match.refused_rotation_deg * M_PI / 180.0);
   const auto is_refused = [&](const Transform& T) {
     if (!(options_.match.refused_rotation_deg > 0)) return false;
     return std::any_of(refused.begin(), refused.end(), [&](const Transform& U) {
-      // cos of the angle between the two rotations: (trace(R_T^T R_U) - 1) / 2
-      return ((T.linear().transpose() * U.linear()).trace() - 1) / 2 >= same_cos &&
-             (T.translation() - U.translation()).norm() <= options_.match.refused_translation_m;
+      return (T.translation() - U.translation()).norm() <= options_.match.refused_translation_m &&
+             rotation_difference_deg(T.linear(), U.linear()) <= options_.match.refused_rotation_deg;
     });
   };
   const IcpTarget& target = icp_target(object);

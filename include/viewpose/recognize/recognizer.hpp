@@ -122,8 +122,7 @@ struct RunOptions {
   /// Databases of at most this many objects are prepared for ICP when the recognizer is made (about
   /// 0.1 s an object), so that the first frames run as fast as the rest; larger ones object by
   /// object as scenes suggest them (the first hypotheses of an object then cost a few milliseconds
-  /// more while its nearest-point grid fills). Either way the results are the same, but where two
-  /// model points are exactly as near a grid cell's centre (then either may be the one used).
+  /// more while its nearest-point grid fills). Either way the results are the same.
   std::size_t prepare_objects_up_to = 16;
 };
 
