@@ -6,6 +6,7 @@
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/kdtree.hpp"
 #include "viewpose/core/nearest_grid.hpp"
+#include "viewpose/core/occupancy_grid.hpp"
 #include "viewpose/core/radix_sort.hpp"
 
 namespace viewpose {
@@ -106,6 +107,72 @@ TEST(NearestGrid, EmptyOrNonFinitePointsFindNothingAndBadSizesThrow) {
   EXPECT_FALSE(grid.nearest(Eigen::Vector3f(1, 2, 3.5f), i, d));
   EXPECT_THROW(NearestGrid(one_tree, one, 0.0f, 0.01f), Error);
   EXPECT_THROW(NearestGrid(one_tree, one, 1e-6f, 10.0f), Error) << "a grid of 10^19 cells is refused, not allocated";
+}
+
+TEST(OccupancyGrid, LevelsAreTwoInAPointsCellOneBesideItAndZeroFarther) {
+  const std::vector<Eigen::Vector3f> pts = sphere_points(3000, 4);  // NaN at 7
+  const float cell = 0.01f;
+  const OccupancyGrid grid(pts, cell);
+  ASSERT_FALSE(grid.empty());
+  EXPECT_FLOAT_EQ(grid.cell_m(), cell);
+  const KdTree tree(pts);
+  // Every point's own cell is occupied.
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (i != 7) {
+      ASSERT_EQ(grid.level(pts[i]), 2) << i;
+    }
+  }
+  // Against the exact distance to the nearest point: level 2 means one within a cell's diagonal,
+  // level 1 within two, and a point nearer than a cell's side always gives a nonzero level.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<float> u(-0.15f, 0.15f);
+  const float diagonal = std::sqrt(3.0f) * cell;
+  int levels[3] = {0, 0, 0};
+  for (int q = 0; q < 20000; ++q) {
+    const Eigen::Vector3f p(u(rng), u(rng), u(rng));
+    std::uint32_t nearest = 0;
+    float d2 = 0;
+    ASSERT_TRUE(tree.nearest(p, nearest, d2));
+    const float d = std::sqrt(d2);
+    const int level = grid.level(p);
+    ++levels[level];
+    if (level == 2) {
+      EXPECT_LE(d, diagonal * 1.0001f);
+    } else if (level == 1) {
+      EXPECT_LE(d, 2 * diagonal * 1.0001f);
+    } else {
+      // A point nearer than a cell's side lies in this cell or one that touches it.
+      EXPECT_GE(d, cell * 0.999f);
+    }
+  }
+  EXPECT_GT(levels[0], 0);
+  EXPECT_GT(levels[1], 0);
+  EXPECT_GT(levels[2], 0);
+  EXPECT_EQ(grid.level(Eigen::Vector3f::Constant(NAN)), 0);
+  EXPECT_EQ(grid.level(Eigen::Vector3f(1e30f, 0, 0)), 0) << "far outside, no overflowing index";
+  EXPECT_EQ(grid.level(Eigen::Vector3f(-1e30f, 0, 0)), 0);
+}
+
+TEST(OccupancyGrid, ARoomSizedCloudGetsWiderCellsAndBadInputNoGrid) {
+  // 20 m wide: cells widened so that no side exceeds the cap.
+  const std::vector<Eigen::Vector3f> wide = {{-10, 0, 1}, {10, 0, 1}, {0, 0.5f, 1}};
+  const OccupancyGrid grid(wide, 0.01f);
+  EXPECT_GE(grid.cell_m(), 20.0f / OccupancyGrid::kMaxCellsPerSide);
+  for (const Eigen::Vector3f& p : wide) EXPECT_EQ(grid.level(p), 2);
+  // Far from the origin, where float rounding eats the grid's margin: still every point's cell.
+  const std::vector<Eigen::Vector3f> far = {{1e6f, 1e6f, 1e6f}, {1e6f + 0.5f, 1e6f, 1e6f}};
+  const OccupancyGrid far_grid(far, 0.01f);
+  for (const Eigen::Vector3f& p : far) EXPECT_EQ(far_grid.level(p), 2);
+  // Nothing finite, a bad cell, or an extent that overflows a float: an empty grid, level 0 everywhere.
+  const std::vector<Eigen::Vector3f> nan = {Eigen::Vector3f::Constant(NAN)};
+  EXPECT_TRUE(OccupancyGrid(nan, 0.01f).empty());
+  EXPECT_TRUE(OccupancyGrid(std::vector<Eigen::Vector3f>{}, 0.01f).empty());
+  EXPECT_TRUE(OccupancyGrid(wide, 0.0f).empty());
+  EXPECT_TRUE(OccupancyGrid(wide, NAN).empty());
+  const std::vector<Eigen::Vector3f> huge = {{-3e38f, 0, 0}, {3e38f, 0, 0}};
+  const OccupancyGrid none(huge, 0.01f);
+  EXPECT_TRUE(none.empty());
+  EXPECT_EQ(none.level(Eigen::Vector3f::Zero()), 0);
 }
 
 TEST(RadixSort, EqualsTheComparisonSortIncludingTheOrderOfEqualKeys) {
