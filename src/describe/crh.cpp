@@ -81,12 +81,19 @@ std::vector<float> crh_roll_angles(const Crh& view, const Crh& scene, const Roll
     for (int m = 0; m < kLags; ++m) r[static_cast<std::size_t>(m)] = std::polar(1.0, 2 * kPi * m / kLags);
     return r;
   }();
+  // Only the harmonics present (0 to 44 and the Nyquist term at 89, 46 of 180) take part: the sum
+  // over the others adds zeros. Real part of p * root: p.re root.re - p.im root.im.
+  std::array<int, kLags> present{};
+  int n_present = 0;
+  for (int k = 0; k < kLags; ++k) {
+    if (product[static_cast<std::size_t>(k)] != 0.0) present[static_cast<std::size_t>(n_present++)] = k;
+  }
   std::vector<std::pair<float, int>> scored(kLags);
   for (int n = 0; n < kLags; ++n) {
     double re = 0;
-    for (int k = 0; k < kLags; ++k) {
-      const std::complex<double>& p = product[static_cast<std::size_t>(k)];
-      if (p != 0.0) re += (p * roots[static_cast<std::size_t>((k * n) % kLags)]).real();
+    for (int i = 0; i < n_present; ++i) {
+      const int k = present[static_cast<std::size_t>(i)];
+      re += (product[static_cast<std::size_t>(k)] * roots[static_cast<std::size_t>((k * n) % kLags)]).real();
     }
     scored[static_cast<std::size_t>(n)] = {static_cast<float>(re), n};
   }
