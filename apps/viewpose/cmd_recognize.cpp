@@ -45,6 +45,7 @@ struct RecognizeFlags {
   bool keep_best = false;
   bool no_split = false;
   std::size_t matches = 20;
+  std::size_t budget = RecognizerOptions{}.match.max_hypotheses;
   double deadline_ms = 0;
   double min_score = -1;  // < 0: the recognizer's default
   bool no_times = false;
@@ -54,6 +55,10 @@ struct RecognizeFlags {
     cmd.add_flag("--no-split", no_split,
                  "Do not split clusters in which nothing is found at concave creases (touching objects); faster");
     cmd.add_option("--matches", matches, "Nearest views tried per cluster")->check(CLI::Range(1, 1000))->capture_default_str();
+    cmd.add_option("--budget", budget,
+                   "Starting poses refined and verified per cluster at most, best coarse fit first (0: every view's "
+                   "every roll, as the thesis did; slower, and rarely finds more)")
+        ->capture_default_str();
     cmd.add_option("--deadline-ms", deadline_ms,
                    "Stop trying poses after this long per frame and report what is verified, marked cut short (0: no limit)")
         ->check(CLI::Range(0.0, 1e7));
@@ -71,6 +76,7 @@ struct RecognizeFlags {
     o.accept.keep_best = keep_best;
     o.split.enabled = !no_split;
     o.match.per_object = matches;
+    o.match.max_hypotheses = budget;
     o.run.deadline_ms = deadline_ms;
     if (min_score >= 0) o.accept.min_confidence = min_score;
     return o;

@@ -91,6 +91,16 @@ def test_metres_as_float_give_the_same_as_millimetres_with_a_scale(scene):
     np.testing.assert_allclose(a[0].T_camera_object, b[0].T_camera_object, atol=1e-6)
 
 
+def test_a_budget_of_starting_poses_is_an_option(scene):
+    db = viewpose.ViewDatabase.load(scene["db"])
+    png, _ = scene["frames"][0]
+    depth = viewpose.read_depth_png(png)
+    for budget in (0, 4):  # every starting pose, and the best four by coarse fit
+        assert len(viewpose.Recognizer(db, budget=budget).recognize(depth, K=scene["K"])) == 1
+    with pytest.raises(TypeError):
+        viewpose.Recognizer(db, budget=-1)
+
+
 def test_the_recognizer_keeps_its_database(scene):
     rec = viewpose.Recognizer(viewpose.ViewDatabase.load(scene["db"]), matches=10)
     gc.collect()

@@ -10,6 +10,7 @@
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/transform.hpp"
 #include "viewpose/database/matching.hpp"
+#include "viewpose/pose/coarse_fit.hpp"
 #include "viewpose/pose/confidence.hpp"
 #include "viewpose/render/simplify.hpp"
 #include "viewpose/segment/convex_segments.hpp"
@@ -56,6 +57,7 @@ const Recognizer::PreparedObject& Recognizer::prepared(std::uint32_t object) con
   std::call_once(p.once, [&] {
     const DatabaseObject& o = db_.objects[object];
     p.target = std::make_unique<IcpTarget>(o.model_points, o.model_normals);
+    p.occupancy = OccupancyGrid(o.model_points, options_.match.fit_cell_m);
     p.drawn = options_.verify_mesh_error_m > 0 ? simplify_for_drawing(o.mesh, options_.verify_mesh_error_m) : o.mesh;
     p.closed_winding = closed_mesh_winding(p.drawn);
   });
@@ -214,46 +216,48 @@ std::vector<char> Recognizer::explained_points(const Detection& detection, const
   return explained;
 }
 
-std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const Transform> T_camera_object_initial,
-                                                               std::uint32_t object,
+std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const Hypothesis> hypotheses,
                                                                std::span<const Eigen::Vector3f> icp_source,
                                                                std::span<const Eigen::Vector3f> cluster, const Frame& frame,
                                                                const VerifyOptions& verify, StageTimes& times,
-                                                               std::span<const Transform> refused) const {
-  std::vector<Refined> out(T_camera_object_initial.size());
-  const auto is_refused = [&](const Transform& T) {
-    if (!(options_.match.refused_rotation_deg > 0)) return false;
-    return std::any_of(refused.begin(), refused.end(), [&](const Transform& U) {
+                                                               const std::vector<std::vector<Transform>>* refused) const {
+  std::vector<Refined> out(hypotheses.size());
+  const auto is_refused = [&](std::uint32_t object, const Transform& T) {
+    if (!refused || !(options_.match.refused_rotation_deg > 0)) return false;
+    const std::vector<Transform>& poses = (*refused)[object];
+    return std::any_of(poses.begin(), poses.end(), [&](const Transform& U) {
       return (T.translation() - U.translation()).norm() <= options_.match.refused_translation_m &&
              rotation_difference_deg(T.linear(), U.linear()) <= options_.match.refused_rotation_deg;
     });
   };
-  const IcpTarget& target = icp_target(object);
-  const VerifyModel model = verify_model(object);
+  // Made before the threads start (each object once, under its own lock).
+  for (const Hypothesis& h : hypotheses) prepared(h.object);
   const auto start = Clock::now();
   const auto n = static_cast<std::ptrdiff_t>(out.size());
 #pragma omp parallel for schedule(dynamic, 1) if (options_.run.parallel_hypotheses && n > 1)
   for (std::ptrdiff_t k = 0; k < n; ++k) {
     Refined& h = out[static_cast<std::size_t>(k)];
+    const Hypothesis& hypothesis = hypotheses[static_cast<std::size_t>(k)];
     auto t = Clock::now();
-    h.icp = icp_point_to_plane(icp_source, target, T_camera_object_initial[static_cast<std::size_t>(k)].inverse(), options_.icp);
+    h.icp = icp_point_to_plane(icp_source, icp_target(hypothesis.object), hypothesis.T_camera_object.inverse(), options_.icp);
     h.icp_ms = ms_since(t);
     h.T_camera_object = h.icp.T_target_source.inverse();
     if (h.icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
-    if (is_refused(h.T_camera_object)) {
+    if (is_refused(hypothesis.object, h.T_camera_object)) {
       h.repeat = true;
       continue;
     }
     t = Clock::now();
-    h.v = verify_pose(model, h.T_camera_object, frame.depth, frame.K, cluster, verify);
+    h.v = verify_pose(verify_model(hypothesis.object), h.T_camera_object, frame.depth, frame.K, cluster, verify);
     h.verify_ms = ms_since(t);
     h.verified = true;
   }
   // Taken in order: the confidence of each pose verification passed, and what the caller hears of it.
-  for (Refined& h : out) {
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    Refined& h = out[k];
     if (!h.verified || !h.v.accepted) continue;
     h.confidence = pose_confidence(h.v);
-    if (options_.accept.on_verified) options_.accept.on_verified({object, h.T_camera_object, h.v, h.confidence});
+    if (options_.accept.on_verified) options_.accept.on_verified({hypotheses[k].object, h.T_camera_object, h.v, h.confidence});
     h.accepted = h.confidence >= options_.accept.min_confidence;
   }
   // The wall time, shared between the two stages as their summed times are.
@@ -270,7 +274,10 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const T
 std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& points, const Frame& frame,
                                                               const VerifyOptions& verify, Recognition& out) const {
   DescribeTimes dt;
-  Region region{describe(points, db_.params.describe, &dt), {}, {}, 0.0, verify, verify, false, std::vector<std::vector<Transform>>(db_.objects.size())};
+  Region region;
+  region.description = describe(points, db_.params.describe, &dt);
+  region.verify = region.near_miss = verify;
+  region.refused.resize(db_.objects.size());
   out.times.normals_ms += dt.normals_ms;
   out.times.vfh_ms += dt.vfh_ms;
   out.times.crh_ms += dt.crh_ms;
@@ -291,7 +298,46 @@ std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& 
   }
   region.near_miss.max_conflict_fraction = std::max(verify.max_conflict_fraction, options_.accept.near_miss_conflict_fraction);
   region.try_near_misses = options_.accept.try_half_turns && region.near_miss.max_conflict_fraction > verify.max_conflict_fraction;
+  region.candidates = rank_candidates(region, out);
   return region;
+}
+
+std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& region, Recognition& out) const {
+  const auto t0 = Clock::now();
+  const Description& d = region.description;
+  // Each view's rolls; views of objects too small for the region give none.
+  std::vector<std::vector<float>> rolls(region.matches.size());
+  const auto n = static_cast<std::ptrdiff_t>(region.matches.size());
+#pragma omp parallel for schedule(static) if (options_.run.parallel_hypotheses && n > 8)
+  for (std::ptrdiff_t m = 0; m < n; ++m) {
+    const ViewEntry& view = db_.views[region.matches[static_cast<std::size_t>(m)].view];
+    if (db_.objects[view.object].diameter_m < region.smallest_diameter) continue;
+    rolls[static_cast<std::size_t>(m)] = crh_roll_angles(view.crh, d.crh, options_.match.roll);
+  }
+  out.times.crh_ms += ms_since(t0);
+  const auto t1 = Clock::now();
+  std::vector<Candidate> candidates;
+  for (std::size_t m = 0; m < region.matches.size(); ++m) {
+    const ViewEntry& view = db_.views[region.matches[m].view];
+    for (const float roll : rolls[m]) {
+      const Transform T_camera_view = crh_alignment(view.centroid.cast<double>(), d.centroid.cast<double>(), roll);
+      candidates.push_back({static_cast<std::uint32_t>(m), view.object, roll, T_camera_view * view.T_view_object, 0.0});
+    }
+  }
+  const OccupancyGrid region_grid(region.icp_source, options_.match.fit_cell_m);
+  for (Candidate& c : candidates) prepared(c.object);  // (each object once)
+  const auto count = static_cast<std::ptrdiff_t>(candidates.size());
+#pragma omp parallel for schedule(static) if (options_.run.parallel_hypotheses && count > 64)
+  for (std::ptrdiff_t k = 0; k < count; ++k) {
+    Candidate& c = candidates[static_cast<std::size_t>(k)];
+    const ViewEntry& view = db_.views[region.matches[c.match].view];
+    const CoarseFitInputs in{region.icp_source, &region_grid, view.icp_points, &prepared(c.object).occupancy};
+    c.fit = coarse_fit(in, c.T_camera_object * view.T_view_object.inverse(), c.T_camera_object, options_.match.fit_points);
+  }
+  // Best fit first; equal fits keep the order of the views' VFH distance and their rolls' peaks.
+  std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.fit > b.fit; });
+  out.times.match_ms += ms_since(t1);
+  return candidates;
 }
 
 std::vector<Transform> Recognizer::half_turns(const Transform& T_camera_object, std::uint32_t object) const {
@@ -306,88 +352,86 @@ std::vector<Transform> Recognizer::half_turns(const Transform& T_camera_object, 
   return turned;
 }
 
-Detection Recognizer::detection_from(const Refined& h, const Region& region, std::size_t rank, float roll_deg) const {
-  const ViewEntry& view = db_.views[region.matches[rank].view];
-  const DatabaseObject& object = db_.objects[view.object];
+std::vector<Recognizer::Hypothesis> Recognizer::turned_hypotheses(const Transform& T_camera_object, std::uint32_t object) const {
+  std::vector<Hypothesis> out;
+  for (const Transform& T : half_turns(T_camera_object, object)) out.push_back({object, T});
+  return out;
+}
+
+Detection Recognizer::detection_from(const Refined& h, const Region& region, const Candidate& c) const {
+  const DatabaseObject& object = db_.objects[c.object];
   Detection det;
   det.object_id = object.id;
   det.object_name = object.name;
-  det.object_index = view.object;
+  det.object_index = c.object;
   det.T_camera_object = h.T_camera_object;
   det.score = h.confidence;
   det.icp_fitness = h.icp.fitness;
   det.icp_rmse_m = h.icp.inlier_rmse;
-  det.match_rank = static_cast<int>(rank);
-  det.roll_deg = roll_deg;
+  det.match_rank = static_cast<int>(c.match);
+  det.roll_deg = c.roll_deg;
   det.cluster_points = region.description.cloud.size();
   det.verification = h.v;
   return det;
 }
 
-std::optional<Detection> Recognizer::try_view(const Region& region, std::size_t rank, const Frame& frame,
-                                              Recognition& out) const {
-  // The poses one database view gives (one per CRH roll peak), each refined and verified; the first
-  // accepted, or with keep_best the best.
+std::optional<Detection> Recognizer::try_candidates(const Region& region, std::span<const std::size_t> which,
+                                                    bool take_best, const Frame& frame, Recognition& out) const {
   std::optional<Detection> found;
+  std::vector<Hypothesis> hypotheses;
+  for (const std::size_t i : which) hypotheses.push_back({region.candidates[i].object, region.candidates[i].T_camera_object});
+  // All at once on the threads there are; then taken in order, as one after the other would.
   const Description& d = region.description;
-  const ViewEntry& view = db_.views[region.matches[rank].view];
-  if (db_.objects[view.object].diameter_m < region.smallest_diameter) return found;
-  const auto t0 = Clock::now();
-  const std::vector<float> rolls = crh_roll_angles(view.crh, d.crh, options_.match.roll);
-  out.times.crh_ms += ms_since(t0);
-  std::vector<Transform> initial;
-  for (const float roll : rolls) {
-    initial.push_back(crh_alignment(view.centroid.cast<double>(), d.centroid.cast<double>(), roll) * view.T_view_object);
-  }
-  // All rolls at once on the threads there are; then taken in order, as one after the other would.
   const std::vector<Refined> refined =
-      refine_and_verify(initial, view.object, region.icp_source, d.cloud.points, frame, region.verify, out.times,
-                        region.refused[view.object]);
+      refine_and_verify(hypotheses, region.icp_source, d.cloud.points, frame, region.verify, out.times, &region.refused);
   const Refined* nearest_miss = nullptr;
-  std::size_t nearest_miss_roll = 0;
+  std::size_t nearest_miss_at = 0;
   for (std::size_t k = 0; k < refined.size(); ++k) {
     const Refined& h = refined[k];
+    const Candidate& c = region.candidates[which[k]];
     ++out.hypotheses;
     if (h.repeat) ++out.repeats;
     if (!h.verified) continue;
-    if (!h.accepted) region.refused[view.object].push_back(h.T_camera_object);
+    if (!h.accepted) region.refused[c.object].push_back(h.T_camera_object);
     if (!h.v.accepted) {
       if (region.try_near_misses && passes(h.v, region.near_miss) && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
         nearest_miss = &h;
-        nearest_miss_roll = k;
+        nearest_miss_at = k;
       }
       continue;
     }
     if (!h.accepted) continue;  // passed verification, but not confidently enough
     if (found && found->verification.score >= h.v.score) continue;
-    found = detection_from(h, region, rank, rolls[k]);
-    if (!options_.accept.keep_best) break;
+    found = detection_from(h, region, c);
+    if (!take_best) break;
   }
   if (!found && nearest_miss && !out_of_time(out)) {
     // Nothing passed, but one pose failed only by seeing through it: try it turned about its axes.
-    const std::vector<Refined> turned = refine_and_verify(half_turns(nearest_miss->T_camera_object, view.object),
-                                                          view.object, region.icp_source, d.cloud.points, frame,
-                                                          region.verify, out.times);
+    const Candidate& c = region.candidates[which[nearest_miss_at]];
+    const std::vector<Refined> turned = refine_and_verify(turned_hypotheses(nearest_miss->T_camera_object, c.object),
+                                                          region.icp_source, d.cloud.points, frame, region.verify, out.times);
     out.hypotheses += turned.size();
     for (const Refined& h : turned) {
-      if (h.accepted && (!found || h.v.score > found->verification.score)) {
-        found = detection_from(h, region, rank, rolls[nearest_miss_roll]);
-      }
+      if (h.accepted && (!found || h.v.score > found->verification.score)) found = detection_from(h, region, c);
     }
   }
   return found;
 }
 
-void Recognizer::challenge(const Region& region, std::size_t rank, Detection& best, const Frame& frame,
+void Recognizer::challenge(const Region& region, std::size_t next, std::size_t end, Detection& best, const Frame& frame,
                            Recognition& out) const {
-  // Another object may explain the region better (two boxes of similar size): the other objects
-  // among the next matches get a few of their nearest views each, and the higher score wins.
-  std::vector<std::size_t> tried(db_.objects.size(), 0);
-  const std::size_t end = std::min(region.matches.size(), rank + options_.match.per_object);
-  for (; rank < end && !out_of_time(out); ++rank) {
-    const std::uint32_t object = db_.views[region.matches[rank].view].object;
+  // Another object may explain the region better (two boxes of similar size): the other objects'
+  // next few starting poses are tried, and the higher verification score wins.
+  std::vector<std::size_t> tried(db_.objects.size(), 0), which;
+  for (std::size_t i = next; i < end; ++i) {
+    const std::uint32_t object = region.candidates[i].object;
     if (object == best.object_index || tried[object]++ >= options_.match.challenger_views) continue;
-    std::optional<Detection> det = try_view(region, rank, frame, out);
+    which.push_back(i);
+  }
+  const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
+  for (std::size_t i = 0; i < which.size() && !out_of_time(out); i += batch) {
+    const std::span<const std::size_t> some(which.data() + i, std::min(batch, which.size() - i));
+    std::optional<Detection> det = try_candidates(region, some, true, frame, out);
     if (det && det->verification.score > best.verification.score) best = std::move(*det);
   }
 }
@@ -395,8 +439,7 @@ void Recognizer::challenge(const Region& region, std::size_t rank, Detection& be
 void Recognizer::turn_if_better(const Region& region, Detection& best, const Frame& frame, Recognition& out) const {
   // The pose turned about the object's own axes, each refined and verified; the best is kept, and
   // the runner-up's score says by how much it won.
-  const std::uint32_t object = best.object_index;
-  const std::vector<Refined> turned = refine_and_verify(half_turns(best.T_camera_object, object), object,
+  const std::vector<Refined> turned = refine_and_verify(turned_hypotheses(best.T_camera_object, best.object_index),
                                                         region.icp_source, region.description.cloud.points, frame,
                                                         region.verify, out.times);
   out.hypotheses += turned.size();
@@ -421,16 +464,25 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
                                                        const VerifyOptions& verify, Recognition& out) const {
   const std::optional<Region> region = describe_region(points, frame, verify, out);
   if (!region) return std::nullopt;
-  // The matches in order until one passes (with keep_best: all of them, the best kept).
+  // The starting poses, best coarse fit first, a batch at a time, until one passes or the budget is
+  // spent (with keep_best: all of them, the best kept).
+  const std::vector<Candidate>& candidates = region->candidates;
+  const std::size_t budget = options_.accept.keep_best || options_.match.max_hypotheses == 0
+                                 ? candidates.size()
+                                 : std::min(candidates.size(), options_.match.max_hypotheses);
+  const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
   std::optional<Detection> best;
-  std::size_t rank = 0;
-  for (; rank < region->matches.size() && !(best && !options_.accept.keep_best); ++rank) {
+  std::size_t next = 0;
+  std::vector<std::size_t> which;
+  while (next < budget && !(best && !options_.accept.keep_best)) {
     if (out_of_time(out)) break;
-    std::optional<Detection> det = try_view(*region, rank, frame, out);
+    which.clear();
+    for (; next < budget && which.size() < batch; ++next) which.push_back(next);
+    std::optional<Detection> det = try_candidates(*region, which, options_.accept.keep_best, frame, out);
     if (det && (!best || det->verification.score > best->verification.score)) best = std::move(det);
   }
   if (!best) return best;
-  if (!options_.accept.keep_best && options_.match.challenger_views > 0) challenge(*region, rank, *best, frame, out);
+  if (!options_.accept.keep_best && options_.match.challenger_views > 0) challenge(*region, next, budget, *best, frame, out);
   if (options_.accept.try_half_turns && !out_of_time(out)) turn_if_better(*region, *best, frame, out);
   if (options_.accept.canonical_poses) {
     // Of the poses the object's symmetries make equivalent, always the same one.

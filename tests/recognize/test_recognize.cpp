@@ -228,6 +228,59 @@ TEST(Recognize, FrameWithNoKnownObjectGivesNoDetection) {
   EXPECT_TRUE(r.detections.empty()) << r.detections.size() << " detections, first " << r.detections[0].object_name;
 }
 
+TEST(Recognize, ARegionOfNothingKnownCostsAtMostItsBudget) {
+  // Where nothing passes, every starting pose given is refined and verified: the budget bounds the
+  // work per region (each batch may add the three half turns of a pose that nearly passed), where
+  // the thesis's exhaustive search tries every roll of every matched view.
+  const Frame frame = frame_from_depth(can_and_mug_frame().depth, K);
+  RecognizerOptions exhaustive;
+  exhaustive.match.max_hypotheses = 0;
+  const Recognition all = Recognizer(jug_db(), exhaustive).recognize(frame);
+  EXPECT_TRUE(all.detections.empty());
+  for (const std::size_t budget : {std::size_t{4}, std::size_t{12}}) {
+    SCOPED_TRACE(budget);
+    RecognizerOptions o;
+    o.match.max_hypotheses = budget;
+    const Recognition r = Recognizer(jug_db(), o).recognize(frame);
+    EXPECT_TRUE(r.detections.empty());
+    ASSERT_GT(r.regions, 0u);
+    const std::size_t batches = (budget + o.run.batch - 1) / o.run.batch;
+    EXPECT_LE(r.hypotheses, r.regions * (budget + 3 * batches));
+    EXPECT_GE(r.hypotheses, r.regions) << "every region tries something";
+    EXPECT_LT(r.hypotheses, all.hypotheses / 2) << "exhaustive: " << all.hypotheses << " over " << all.regions << " regions";
+  }
+}
+
+TEST(Recognize, TheBudgetFindsWhatTheExhaustiveSearchFinds) {
+  // The jug alone, and the jug beside the can, over several orientations: the first few starting
+  // poses by coarse fit hold one that passes, so a budget of 12 gives the exhaustive search's
+  // objects, each within ADD-S 10 % of the truth, with a fraction of its work.
+  const ViewDatabase& db = jug_and_can_db();
+  RecognizerOptions exhaustive, budget;
+  exhaustive.match.max_hypotheses = 0;
+  budget.match.max_hypotheses = 12;
+  const Recognizer all(db, exhaustive), some(db, budget);
+  const TriangleMesh jug = make_jug();
+  SeedExperimentOptions setup;
+  setup.distances_m = {1.0, 1.5};
+  setup.orientations = 3;
+  const SimDataset ds = make_seed_experiment(ObjectModel{1, "jug", jug}, K, setup, 12);
+  std::size_t work_all = 0, work_some = 0;
+  for (const SimScene& scene : ds.scenes)
+    for (std::size_t k = 0; k < scene.images.size(); ++k) {
+      const SimulatedFrame f = simulate_image(ds, scene.images[k], SensorModel::kinect_v1(), 40 + k);
+      const Frame frame = frame_from_depth(f.depth, K);
+      const Recognition a = all.recognize(frame), b = some.recognize(frame);
+      ASSERT_EQ(a.detections.size(), 1u);
+      ASSERT_EQ(b.detections.size(), 1u) << scene.description << ", image " << k;
+      EXPECT_EQ(b.detections[0].object_id, 1);
+      EXPECT_LT(add_s_error(b.detections[0].T_camera_object, f.gt[0].T_camera_object, jug.vertices), 0.1 * mesh_diameter(jug));
+      work_all += a.hypotheses;
+      work_some += b.hypotheses;
+    }
+  EXPECT_LE(work_some, work_all);
+}
+
 TEST(Recognize, PosesRefinedOntoOnesAlreadyRefusedAreNotVerifiedAgain) {
   // Where nothing is known, every view of every match is refined, and many land on the same few
   // poses: those are refused once. Verifying them all again must find nothing more.

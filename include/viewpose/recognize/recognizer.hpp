@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "viewpose/core/occupancy_grid.hpp"
 #include "viewpose/core/stopwatch.hpp"
 #include "viewpose/database/matching.hpp"
 #include "viewpose/database/view_database.hpp"
@@ -34,9 +35,9 @@ struct VerifiedHypothesis {
 };
 
 /// Which database views are tried for a region (a cluster, a convex part, what a detection left of
-/// a cluster), and the poses each gives.
+/// a cluster), the poses each gives, and in what order they are refined and verified.
 struct MatchOptions {
-  std::size_t per_object = 20;  ///< nearest views tried per region and object (thesis: 20, one object)
+  std::size_t per_object = 20;  ///< nearest views per region and object (thesis: 20, one object)
   /// At most this many views per region in all, the nearest (each object at most `per_object`): with
   /// up to six objects every object gets its 20; a database of a thousand gets the 120 nearest.
   std::size_t at_most = 120;
@@ -44,14 +45,28 @@ struct MatchOptions {
   /// frames of the simulated seed experiment (a narrow side view); these found all 100, still
   /// without a false positive (docs/RESULTS.md).
   RollOptions roll = {10, 0.2f, 0.5f};
+  /// Every view's every roll is a starting pose; they are ordered by their coarse fit
+  /// (pose/coarse_fit: the region on the model and the view on the region, in cells of this size,
+  /// from this many points each way), best first, and refined and verified in that order.
+  float fit_cell_m = 0.01f;
+  std::size_t fit_points = 64;
+  /// At most this many starting poses are refined and verified per region (0: all of them, as the
+  /// thesis did). The search is a budget, not exhaustive: a region of nothing known (most of a real
+  /// frame) costs every pose it is given. Chosen by measurement (make results, docs/RESULTS.md):
+  /// at 48 every set found what the exhaustive search found (real YCB-Video 89 % ADD-S, simulated
+  /// rooms 88 %, the seed experiment 100 % at 0.75 m) but one seed-room frame at 2 m, at a quarter
+  /// of its time (real YCB-Video median 0.76 -> 0.19 s); at 24 the seed experiment lost a frame at
+  /// 0.75 m and the rooms 4 % (the right pose's coarse fit is poor when its CRH roll is off and ICP
+  /// brings it in from far).
+  std::size_t max_hypotheses = 48;
   /// Skip the views of objects too small to explain a region: verification wants
   /// verify.min_cluster_explained of its points on the model's surface, and no object can cover
   /// points spread wider than its diameter (plus the depth tolerance and a few pixels each side;
   /// core_width). Changes no result, only what is tried: a large unknown thing (a box, a monitor)
   /// is not tried against every small object's views.
   bool skip_objects_too_small = true;
-  /// Once a pose of one object passes, each other object among the next `per_object` matches tries
-  /// up to this many of its views, and the higher verification score wins (0: the first pass stands).
+  /// Once a pose of one object passes, each other object tries up to this many of its next starting
+  /// poses (within the budget), and the higher verification score wins (0: the first pass stands).
   std::size_t challenger_views = 3;
   double max_region_size_factor = 1.5;  ///< regions wider than this x the largest object are not tried
   /// Many views and rolls of a region refine to the same pose. One that ICP brings within this
@@ -116,9 +131,13 @@ struct RunOptions {
   /// rolls run together), so a frame overruns it by at most one view's refinement, a few ms. A
   /// pose found in time is kept even if its half-turn check had to be left out.
   double deadline_ms = 0;
-  /// Refine and verify independent hypotheses (a view's CRH rolls, the half turns) on several
-  /// threads, taken in order afterwards: the result is the same either way.
+  /// Refine and verify independent hypotheses (a batch of starting poses, the half turns) on
+  /// several threads, taken in order afterwards: the result is the same either way.
   bool parallel_hypotheses = true;
+  /// Starting poses are refined and verified this many at a time (the first that passes in a batch
+  /// is taken, as one after the other would). A fixed number, not the thread count, so that results
+  /// do not depend on the machine; enough to keep a few cores busy.
+  std::size_t batch = 4;
   /// Databases of at most this many objects are prepared for ICP when the recognizer is made (about
   /// 0.1 s an object), so that the first frames run as fast as the rest; larger ones object by
   /// object as scenes suggest them (the first hypotheses of an object then cost a few milliseconds
@@ -155,7 +174,7 @@ struct Detection {
   double score = 0;          ///< confidence in [0, 1]: the estimated probability that the pose is right (pose/confidence)
   double icp_fitness = 0;    ///< share of cluster points with a model correspondence
   double icp_rmse_m = 0;     ///< RMS point-to-plane residual
-  int match_rank = 0;        ///< 0 = the nearest view
+  int match_rank = 0;        ///< the view's rank among the region's nearest by VFH (0 = the nearest)
   float roll_deg = 0;        ///< the CRH roll that led to it
   /// Best verification score (Verification::score) of the half-turned alternatives (0 if none
   /// passed): verification.score minus this is the margin by which the chosen side won.
@@ -206,31 +225,48 @@ class Recognizer {
   std::optional<Detection> recognize_cluster(const PointCloud& points, const Frame& frame, const VerifyOptions& verify,
                                              Recognition& out) const;
   struct Refined;
-  // What every view tried for one region needs: its description, its nearest views, its ICP copy,
-  // and the bounds its poses are verified with.
+  // A starting pose: a database view (by its rank among the region's matches) turned by one CRH roll.
+  struct Candidate {
+    std::uint32_t match = 0;  // into Region::matches
+    std::uint32_t object = 0;
+    float roll_deg = 0;
+    Transform T_camera_object = Transform::Identity();
+    double fit = 0;  // coarse_fit
+  };
+  // What every pose tried for one region needs: its description, its nearest views and the starting
+  // poses they give (best coarse fit first), its ICP copy, and the bounds its poses are verified with.
   struct Region {
     Description description;
     std::vector<Match> matches;
+    std::vector<Candidate> candidates;
     std::vector<Eigen::Vector3f> icp_source;
     double smallest_diameter = 0;  // objects narrower than this cannot explain the region
     VerifyOptions verify;
     VerifyOptions near_miss;  // verify with the looser conflict bound of a pose the wrong way round
     bool try_near_misses = false;
-    // By object, the refined poses verification refused so far (try_view skips their repeats). A
-    // region's views are tried one after another, on the calling thread.
+    // By object, the refined poses verification refused so far (try_candidates skips their
+    // repeats). A region's batches are tried one after another, on the calling thread.
     mutable std::vector<std::vector<Transform>> refused;
   };
-  // The region described and matched; nullopt when it has too few points with normals.
+  // The region described and matched, its starting poses ranked; nullopt when it has too few points
+  // with normals.
   std::optional<Region> describe_region(const PointCloud& points, const Frame& frame, const VerifyOptions& verify,
                                         Recognition& out) const;
-  // The poses the view at `rank` gives, refined and verified: the first accepted (or the best).
-  std::optional<Detection> try_view(const Region& region, std::size_t rank, const Frame& frame, Recognition& out) const;
-  // Other objects among the matches after `rank` try a few views each; a higher score replaces `best`.
-  void challenge(const Region& region, std::size_t rank, Detection& best, const Frame& frame, Recognition& out) const;
+  // Every roll of every matched view as a starting pose, best coarse fit first.
+  std::vector<Candidate> rank_candidates(const Region& region, Recognition& out) const;
+  // The starting poses `which` (indices into region.candidates), refined and verified together: the
+  // first accepted in order (with take_best, the best). A batch in which nothing passes but one pose
+  // fails only by its free-space conflicts has that pose's half turns tried at once.
+  std::optional<Detection> try_candidates(const Region& region, std::span<const std::size_t> which, bool take_best,
+                                          const Frame& frame, Recognition& out) const;
+  // Other objects' next starting poses after position `next` (a few each, within `end`); a higher
+  // verification score replaces `best`.
+  void challenge(const Region& region, std::size_t next, std::size_t end, Detection& best, const Frame& frame,
+                 Recognition& out) const;
   // `best` turned half a turn about each of its axes; the best of the four is kept.
   void turn_if_better(const Region& region, Detection& best, const Frame& frame, Recognition& out) const;
   std::vector<Transform> half_turns(const Transform& T_camera_object, std::uint32_t object) const;
-  Detection detection_from(const Refined& h, const Region& region, std::size_t rank, float roll_deg) const;
+  Detection detection_from(const Refined& h, const Region& region, const Candidate& c) const;
   // A cluster, or what is left of one: recognized whole, else split into convex parts; once a part
   // is recognized, its object's points are taken away and the rest recognized again (depth + 1).
   void recognize_region(const PointCloud& points, const Frame& frame, Recognition& out, int depth) const;
@@ -253,17 +289,26 @@ class Recognizer {
     bool accepted = false;  // v passes and the confidence reaches min_confidence
     double icp_ms = 0, verify_ms = 0;
   };
-  // Each initial pose of `object`, refined and verified, in parallel when allowed; the results in
-  // the order given, so that what is made of them does not depend on the threads.
-  std::vector<Refined> refine_and_verify(std::span<const Transform> T_camera_object_initial, std::uint32_t object,
-                                         std::span<const Eigen::Vector3f> icp_source, std::span<const Eigen::Vector3f> cluster,
-                                         const Frame& frame, const VerifyOptions& verify, StageTimes& times,
-                                         std::span<const Transform> refused = {}) const;
+  // An initial pose of an object.
+  struct Hypothesis {
+    std::uint32_t object = 0;
+    Transform T_camera_object = Transform::Identity();
+  };
+  // Each hypothesis refined and verified, in parallel when allowed; the results in the order given,
+  // so that what is made of them does not depend on the threads. Those ICP brings onto a pose in
+  // `refused` (by object; may be null) are not verified.
+  std::vector<Refined> refine_and_verify(std::span<const Hypothesis> hypotheses, std::span<const Eigen::Vector3f> icp_source,
+                                         std::span<const Eigen::Vector3f> cluster, const Frame& frame,
+                                         const VerifyOptions& verify, StageTimes& times,
+                                         const std::vector<std::vector<Transform>>* refused = nullptr) const;
+  // `T_camera_object`'s half turns, as hypotheses of `object`.
+  std::vector<Hypothesis> turned_hypotheses(const Transform& T_camera_object, std::uint32_t object) const;
   // What ICP and verification need of an object, made on its first hypothesis: a database of a
   // thousand objects costs nothing for the objects a scene never suggests.
   struct PreparedObject {
     std::once_flag once;
     std::unique_ptr<IcpTarget> target;
+    OccupancyGrid occupancy;  // of the model points, for coarse_fit
     TriangleMesh drawn;      // the mesh verification draws (simplified)
     int closed_winding = 0;  // closed_mesh_winding of `drawn`
   };
