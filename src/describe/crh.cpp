@@ -82,18 +82,25 @@ std::vector<float> crh_roll_angles(const Crh& view, const Crh& scene, const Roll
     return r;
   }();
   // Only the harmonics present (0 to 44 and the Nyquist term at 89, 46 of 180) take part: the sum
-  // over the others adds zeros. Real part of p * root: p.re root.re - p.im root.im.
+  // over the others adds zeros. The real part of p * root written out (p.re root.re - p.im root.im,
+  // as std::complex computes it, without its checks for infinities, which cost a call per term).
+  std::array<double, kLags> p_re{}, p_im{};
   std::array<int, kLags> present{};
   int n_present = 0;
   for (int k = 0; k < kLags; ++k) {
-    if (product[static_cast<std::size_t>(k)] != 0.0) present[static_cast<std::size_t>(n_present++)] = k;
+    const std::complex<double>& p = product[static_cast<std::size_t>(k)];
+    if (p == 0.0) continue;
+    p_re[static_cast<std::size_t>(n_present)] = p.real();
+    p_im[static_cast<std::size_t>(n_present)] = p.imag();
+    present[static_cast<std::size_t>(n_present++)] = k;
   }
   std::vector<std::pair<float, int>> scored(kLags);
   for (int n = 0; n < kLags; ++n) {
     double re = 0;
     for (int i = 0; i < n_present; ++i) {
-      const int k = present[static_cast<std::size_t>(i)];
-      re += (product[static_cast<std::size_t>(k)] * roots[static_cast<std::size_t>((k * n) % kLags)]).real();
+      const auto j = static_cast<std::size_t>(i);
+      const std::complex<double>& root = roots[static_cast<std::size_t>((present[j] * n) % kLags)];
+      re += p_re[j] * root.real() - p_im[j] * root.imag();
     }
     scored[static_cast<std::size_t>(n)] = {static_cast<float>(re), n};
   }
