@@ -140,7 +140,7 @@ BENCHMARK(BM_IcpOneHypothesis)->Unit(benchmark::kMillisecond)->UseRealTime();
 void BM_VerifyOneHypothesis(benchmark::State& state) {
   const Inputs& in = inputs();
   const DatabaseObject& o = in.db.objects[0];
-  const VerifyModel model{&o.mesh, o.model_points, in.db.params.voxel_m, closed_mesh_winding(o.mesh)};
+  const VerifyModel model{&o.mesh, o.model_points, in.db.params.voxel_m, closed_mesh_winding(o.mesh), o.model_normals};
   for (auto _ : state) {
     benchmark::DoNotOptimize(verify_pose(model, in.T_camera_object, in.frame.depth, in.K, in.description.cloud.points));
   }

@@ -294,10 +294,48 @@ void summarize(const InteriorSums& sums, int step, Verification& v) {
 
 }  // namespace
 
+SeenThrough seen_through(std::span<const Eigen::Vector3f> points, std::span<const Eigen::Vector3f> normals, const Transform& T_camera_object, const DepthImage& observed,
+                         const CameraIntrinsics& K, const VerifyOptions& o, std::size_t max_points) {
+  SeenThrough s;
+  if (points.empty() || max_points == 0 || observed.width != K.width || observed.height != K.height) return s;
+  const std::size_t n = std::min(points.size(), max_points);
+  const Eigen::Matrix3f R = T_camera_object.linear().cast<float>();
+  const Eigen::Vector3f t = T_camera_object.translation().cast<float>();
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t at = points.size() * k / n;
+    const Eigen::Vector3f p = R * points[at] + t;
+    if (!(p.z() > 0)) continue;
+    // A point whose surface the line of sight grazes lies at the model's outline, where a pixel's
+    // error reads as seen through; the full test leaves its outline out too. (Cosine 0.5: 60 degrees.)
+    if (normals.size() == points.size() && std::abs((R * normals[at]).dot(p)) < 0.5f * p.norm()) continue;
+    const float u = static_cast<float>(K.fx) * p.x() / p.z() + static_cast<float>(K.cx);
+    const float v = static_cast<float>(K.fy) * p.y() / p.z() + static_cast<float>(K.cy);
+    // Nearest pixel centre; outside the image (NaN included) nothing is judged.
+    if (!(u > -0.5f && v > -0.5f && u < static_cast<float>(K.width) - 0.5f && v < static_cast<float>(K.height) - 0.5f)) continue;
+    const int iu = static_cast<int>(u + 0.5f), iv = static_cast<int>(v + 0.5f);
+    const float z = observed.at(iu, iv);
+    if (!std::isfinite(z)) continue;
+    const float tolerance = depth_tolerance(p.z(), o);
+    if (z < p.z() - tolerance) continue;  // something in front: hidden, not judged
+    ++s.judged;
+    if (z > p.z() + tolerance) ++s.seen_through;
+  }
+  return s;
+}
+
 Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_object, const DepthImage& observed,
                          const CameraIntrinsics& K, std::span<const Eigen::Vector3f> cluster_points,
                          const VerifyOptions& o) {
   Verification v;
+  if (o.quick_max_seen_through < 1) {
+    const SeenThrough quick = seen_through(shape.points, shape.normals, T_camera_object, observed, K, o, o.quick_points);
+    if (quick.judged >= o.quick_min_judged && quick.fraction() > o.quick_max_seen_through) {
+      v.refused_quickly = true;
+      v.conflict_fraction = quick.fraction();
+      v.inlier_fraction = 1 - quick.fraction();
+      return v;
+    }
+  }
   const JudgedWindow w = judged_window(shape, T_camera_object, K, o);
   v.pixel_step = w.step;
   const RenderedFrame model = draw_model(shape, T_camera_object, w);

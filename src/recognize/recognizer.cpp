@@ -67,7 +67,7 @@ const Recognizer::PreparedObject& Recognizer::prepared(std::uint32_t object) con
 VerifyModel Recognizer::verify_model(std::uint32_t object) const {
   const DatabaseObject& o = db_.objects[object];
   const PreparedObject& p = prepared(object);
-  return {&p.drawn, o.model_points, db_.params.voxel_m, p.closed_winding};
+  return {&p.drawn, o.model_points, db_.params.voxel_m, p.closed_winding, o.model_normals};
 }
 
 bool Recognizer::out_of_time(Recognition& out) const {

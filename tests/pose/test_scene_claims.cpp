@@ -60,8 +60,8 @@ TEST(SceneClaims, TwoPosesOfOneObjectClaimTheSamePixelsAndTheSecondIsDropped) {
   ASSERT_GT(jug_pixels, 5000u);
   ASSERT_GT(can_pixels, 1000u);
 
-  const VerifyModel jug_model{&jug, {}, 0.003f, closed_mesh_winding(jug)};
-  const VerifyModel can_model{&can, {}, 0.003f, closed_mesh_winding(can)};
+  const VerifyModel jug_model{&jug, {}, 0.003f, closed_mesh_winding(jug), {}};
+  const VerifyModel can_model{&can, {}, 0.003f, closed_mesh_winding(can), {}};
   // The true poses claim what they show (and nothing of the other object or the wall).
   const std::vector<std::uint32_t> jug_claim = claimed_pixels(jug_model, T_camera_jug, f.depth, K);
   const std::vector<std::uint32_t> can_claim = claimed_pixels(can_model, T_camera_can, f.depth, K);
@@ -92,7 +92,7 @@ TEST(SceneClaims, TwoPosesOfOneObjectClaimTheSamePixelsAndTheSecondIsDropped) {
 TEST(SceneClaims, AFrameOfAnotherSizeClaimsNothing) {
   const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
   const TriangleMesh jug = make_jug();
-  const VerifyModel model{&jug, {}, 0.003f, closed_mesh_winding(jug)};
+  const VerifyModel model{&jug, {}, 0.003f, closed_mesh_winding(jug), {}};
   const DepthImage small(320, 240);
   EXPECT_TRUE(claimed_pixels(model, make_transform(Eigen::Matrix3d::Identity(), {0, 0, 1}), small, K).empty());
 }

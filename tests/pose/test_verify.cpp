@@ -1,6 +1,8 @@
 // Verification against known answers: a model drawn into a frame at a known pose is checked at
 // that pose, and at poses moved off it, where the frame contradicts the model.
+#include <algorithm>
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include "test_support.hpp"
@@ -32,7 +34,7 @@ struct Scene {
       if (f.instance[i] == 0) cluster.push_back(cloud.points[i]);
   }
   Verification check(const Transform& T, const VerifyOptions& o = {}) const {
-    const VerifyModel model{&jug, {}, 0.003f, closed_mesh_winding(jug)};
+    const VerifyModel model{&jug, {}, 0.003f, closed_mesh_winding(jug), {}};
     return verify_pose(model, T, depth, K, cluster, o);
   }
   Transform moved(double dx, double dy, double dz) const {
@@ -70,6 +72,88 @@ TEST(Verify, APoseTheCameraSeesThroughOrBehindItsOwnSurfaceIsRefused) {
   EXPECT_LT(aside.cluster_explained, 0.7);
   // What the options say is what `accepted` says.
   for (const Verification& v : {nearer, farther, aside}) EXPECT_EQ(v.accepted, passes(v, VerifyOptions{}));
+}
+
+// 4000 points spread evenly over the jug's surface (by area, seeded), with their faces' normals: as
+// a database's model points are.
+void jug_surface(const TriangleMesh& jug, std::vector<Eigen::Vector3f>& points, std::vector<Eigen::Vector3f>& normals) {
+  std::vector<double> cumulative;
+  double total = 0;
+  for (const auto& t : jug.triangles) {
+    total += 0.5 * static_cast<double>((jug.vertices[t[1]] - jug.vertices[t[0]]).cross(jug.vertices[t[2]] - jug.vertices[t[0]]).norm());
+    cumulative.push_back(total);
+  }
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < 4000; ++i) {
+    const auto k = static_cast<std::size_t>(std::lower_bound(cumulative.begin(), cumulative.end(), u(rng) * total) - cumulative.begin());
+    const auto& t = jug.triangles[std::min(k, jug.triangles.size() - 1)];
+    const Eigen::Vector3f a = jug.vertices[t[0]], b = jug.vertices[t[1]], c = jug.vertices[t[2]];
+    float r1 = static_cast<float>(u(rng)), r2 = static_cast<float>(u(rng));
+    if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
+    const Eigen::Vector3f n = (b - a).cross(c - a);
+    if (!(n.norm() > 0)) continue;
+    points.push_back(a + r1 * (b - a) + r2 * (c - a));
+    normals.push_back(n.normalized());
+  }
+}
+
+TEST(Verify, TheQuickTestSeesThroughAMisplacedModelAndNotThroughTheRightOne) {
+  const Scene s;
+  std::vector<Eigen::Vector3f> points, normals;
+  jug_surface(s.jug, points, normals);
+  ASSERT_GT(points.size(), 500u);
+  const VerifyOptions o;
+  const auto quick = [&](const Transform& T, std::span<const Eigen::Vector3f> n) {
+    return seen_through(points, n, T, s.depth, s.K, o, 2000);
+  };
+  // At the true pose: the far side and the inside are hidden by the near side (not judged), the
+  // near side judged and hardly ever seen through; without normals the outline's points add some.
+  const SeenThrough right = quick(s.T_camera_jug, normals);
+  EXPECT_GT(right.judged, 100u);
+  EXPECT_LT(right.fraction(), 0.03);
+  EXPECT_LT(quick(s.T_camera_jug, {}).fraction(), 0.15);
+  EXPECT_LE(right.judged, 2000u);
+  // 20 cm to the side, in front of the bare wall: the camera sees the wall 0.7 m behind the model.
+  const SeenThrough aside = quick(s.moved(0.2, 0, 0), normals);
+  EXPECT_GT(aside.judged, 100u);
+  EXPECT_GT(aside.fraction(), 0.95);
+  // Behind the wall: everything measured lies in front of the model, nothing is judged.
+  EXPECT_EQ(quick(s.moved(0, 0, 1.2), normals).judged, 0u);
+  // Out of the image, or no points: nothing judged.
+  EXPECT_EQ(quick(s.moved(5.0, 0, 0), normals).judged, 0u);
+  EXPECT_EQ(seen_through({}, {}, s.T_camera_jug, s.depth, s.K, o, 512).judged, 0u);
+}
+
+TEST(Verify, APoseRefusedQuicklyIsNeverOneTheFullTestAccepts) {
+  const Scene s;
+  std::vector<Eigen::Vector3f> points, normals;
+  jug_surface(s.jug, points, normals);
+  const VerifyModel model{&s.jug, points, 0.003f, closed_mesh_winding(s.jug), normals};
+  VerifyOptions full_only;
+  full_only.quick_max_seen_through = 1;
+  // The true pose passes both ways, and the quick test leaves it to the full one.
+  const Verification right = verify_pose(model, s.T_camera_jug, s.depth, s.K, s.cluster);
+  EXPECT_TRUE(right.accepted);
+  EXPECT_FALSE(right.refused_quickly);
+  // Misplaced by 2 to 20 cm across the line of sight: whenever the quick test refuses, the full
+  // test refuses too, and the far-off poses are refused quickly.
+  int refused_quickly = 0;
+  for (const double dx : {0.02, 0.05, 0.1, 0.2}) {
+    SCOPED_TRACE(dx);
+    const Verification quick = verify_pose(model, s.moved(dx, 0, 0), s.depth, s.K, s.cluster);
+    const Verification full = verify_pose(model, s.moved(dx, 0, 0), s.depth, s.K, s.cluster, full_only);
+    EXPECT_FALSE(full.refused_quickly);
+    EXPECT_FALSE(quick.accepted);
+    EXPECT_FALSE(full.accepted);
+    if (quick.refused_quickly) {
+      ++refused_quickly;
+      EXPECT_GT(quick.conflict_fraction, 0.5);
+      EXPECT_EQ(quick.inliers, 0u) << "nothing else is filled in";
+      EXPECT_GT(full.conflict_fraction, 0.05);
+    }
+  }
+  EXPECT_GE(refused_quickly, 2);
 }
 
 TEST(Verify, JudgingEveryFewPixelsEstimatesTheSameFractionsAndCounts) {
@@ -121,7 +205,7 @@ struct FaceOnWall {
       if (std::isfinite(face.depth.depth_m[i]) && cloud.points[i].allFinite()) cluster.push_back(cloud.points[i]);
   }
   Verification check(const VerifyOptions& o = {}) const {
-    const VerifyModel model{&box, {}, 0.003f, closed_mesh_winding(box)};
+    const VerifyModel model{&box, {}, 0.003f, closed_mesh_winding(box), {}};
     return verify_pose(model, T_camera_box, depth, K, cluster, o);
   }
 };
