@@ -288,6 +288,16 @@ std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& 
   region.matches = index_.nearest(d.vfh, options_.match.per_object, options_.match.at_most);
   out.times.match_ms += ms_since(t_match);
   region.icp_source = voxel_downsample(d.cloud, db_.params.icp_voxel_m).points;
+  // Where the sensor's pixels lie farther apart than the ICP copy's voxels, the region holds fewer
+  // of them than its surface would: counted as if sampled densely (an upper bound on its surface).
+  region.icp_points_dense = static_cast<double>(region.icp_source.size());
+  if (frame.K.fx > 0 && !region.icp_source.empty()) {
+    double z_sum = 0;
+    for (const auto& p : region.icp_source) z_sum += static_cast<double>(p.z());
+    const double pixel_m = z_sum / static_cast<double>(region.icp_source.size()) / frame.K.fx;
+    const double voxel_m = static_cast<double>(db_.params.icp_voxel_m);
+    if (pixel_m > voxel_m) region.icp_points_dense *= (pixel_m / voxel_m) * (pixel_m / voxel_m);
+  }
   // Objects whose diameter is below this cannot have min_cluster_explained of the region on their
   // surface (an explained point lies within the depth tolerance, and a pixel or so, of the model).
   if (options_.match.skip_objects_too_small && frame.K.fx > 0) {
@@ -312,6 +322,7 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
   for (std::ptrdiff_t m = 0; m < n; ++m) {
     const ViewEntry& view = db_.views[region.matches[static_cast<std::size_t>(m)].view];
     if (db_.objects[view.object].diameter_m < region.smallest_diameter) continue;
+    if (static_cast<double>(view.icp_points.size()) * options_.match.min_region_to_view > region.icp_points_dense) continue;
     rolls[static_cast<std::size_t>(m)] = crh_roll_angles(view.crh, d.crh, options_.match.roll);
   }
   out.times.crh_ms += ms_since(t0);

@@ -357,6 +357,32 @@ TEST(Recognize, ObjectsTooSmallForAClusterAreSkippedWithTheSameResult) {
   EXPECT_EQ(skipping.detections[0].score, trying.detections[0].score);
 }
 
+TEST(Recognize, ViewsShowingFarMoreThanARegionAreSkippedWithTheSameResult) {
+  // The jug and two small unknown boxes (4 and 5 cm) on the table, and a database of the jug: each
+  // box's region is a small fraction of any jug view's surface, too little to pass verification,
+  // so those views are not tried there. Skipping them must change nothing but the work.
+  const ViewDatabase& db = jug_db();
+  JugAndCan scene = jug_and_can_scene();
+  scene.ds.objects.push_back({3, "small box", make_box_mesh({0.04f, 0.04f, 0.03f})});
+  scene.ds.objects.push_back({4, "other box", make_box_mesh({0.05f, 0.03f, 0.04f})});
+  const double lift = static_cast<double>(bounding_box(make_jug()).min.z());
+  const Transform a = scene.jug_pose * make_transform(Eigen::Matrix3d::Identity(), {0.25, 0.0, lift + 0.015});
+  const Transform b = scene.jug_pose * make_transform(Eigen::Matrix3d::Identity(), {-0.25, 0.05, lift + 0.02});
+  const SimulatedFrame f = simulate_image(scene.ds, SimImage{{{0, scene.jug_pose}, {2, a}, {3, b}}}, SensorModel::kinect_v1(), 4);
+  ASSERT_GT(f.gt_info[1].px_count_visib, 300);
+  ASSERT_GT(f.gt_info[2].px_count_visib, 300);
+  const Frame frame = frame_from_depth(f.depth, K);
+  RecognizerOptions all;
+  all.match.min_region_to_view = 0;
+  const Recognition skipping = Recognizer(db).recognize(frame), trying = Recognizer(db, all).recognize(frame);
+  EXPECT_GE(trying.regions, 3u);
+  EXPECT_LT(skipping.hypotheses, trying.hypotheses);
+  ASSERT_EQ(skipping.detections.size(), 1u);
+  ASSERT_EQ(trying.detections.size(), 1u);
+  EXPECT_TRUE(skipping.detections[0].T_camera_object.matrix() == trying.detections[0].T_camera_object.matrix());
+  EXPECT_EQ(skipping.detections[0].score, trying.detections[0].score);
+}
+
 TEST(Recognize, TouchingObjectsAreBothFound) {
   // The same two objects, the can now standing against the jug's side (3 mm into it, so that the
   // sensor's points join them): one Euclidean cluster. The jug explains enough of it to pass, and
