@@ -3,6 +3,7 @@
 #include "viewpose/core/stopwatch.hpp"
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <span>
 
 #include <fmt/format.h>
@@ -157,16 +158,18 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   // One part that is nearly the whole region has been tried already.
   if (parts.empty() || (parts.size() == 1 && parts[0].size() > 0.9 * static_cast<double>(points.size()))) return;
   ++out.split_clusters;
+  // Every part described, then their starting poses tried together, within one budget.
+  std::vector<Region> regions;
   for (const Cluster& part : parts) {
     if (out_of_time(out)) return;
     const PointCloud part_points = cluster_points(points, part);
     if (bounding_box(part_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
-    std::optional<Detection> det = recognize_cluster(part_points, frame, part_verify, out);
-    if (!det) continue;
-    det->from_split_cluster = true;
-    recognize_rest(points, std::move(*det), frame, out, depth);
-    return;
+    if (std::optional<Region> region = describe_region(part_points, frame, part_verify, out)) regions.push_back(std::move(*region));
   }
+  std::optional<Detection> det = search(regions, frame, out);
+  if (!det) return;
+  det->from_split_cluster = true;
+  recognize_rest(points, std::move(*det), frame, out, depth);
 }
 
 void Recognizer::recognize_rest(const PointCloud& points, Detection detection, const Frame& frame, Recognition& out,
@@ -473,28 +476,43 @@ void Recognizer::turn_if_better(const Region& region, Detection& best, const Fra
 
 std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points, const Frame& frame,
                                                        const VerifyOptions& verify, Recognition& out) const {
-  const std::optional<Region> region = describe_region(points, frame, verify, out);
-  if (!region) return std::nullopt;
-  // The starting poses, best coarse fit first, a batch at a time, until one passes or the budget is
-  // spent (with keep_best: all of them, the best kept).
-  const std::vector<Candidate>& candidates = region->candidates;
-  const std::size_t budget = options_.accept.keep_best || options_.match.max_hypotheses == 0
-                                 ? candidates.size()
-                                 : std::min(candidates.size(), options_.match.max_hypotheses);
+  std::vector<Region> regions;
+  if (std::optional<Region> region = describe_region(points, frame, verify, out)) regions.push_back(std::move(*region));
+  return search(regions, frame, out);
+}
+
+std::optional<Detection> Recognizer::search(const std::vector<Region>& regions, const Frame& frame, Recognition& out) const {
+  // The starting poses of every region, best coarse fit first across them, a batch at a time from
+  // one region, until one passes or the budget is spent (with keep_best: all of them, the best
+  // kept). The regions share the budget: the convex parts of one cluster compete for it.
+  const bool every = options_.accept.keep_best || options_.match.max_hypotheses == 0;
+  const std::size_t budget = every ? std::numeric_limits<std::size_t>::max() : options_.match.max_hypotheses;
+  std::vector<std::size_t> next(regions.size(), 0), end(regions.size());
+  for (std::size_t r = 0; r < regions.size(); ++r) end[r] = std::min(regions[r].candidates.size(), budget);
   const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
   std::optional<Detection> best;
-  std::size_t next = 0;
+  std::size_t best_region = 0, spent = 0;
   std::vector<std::size_t> which;
-  while (next < budget && !(best && !options_.accept.keep_best)) {
+  while (spent < budget && !(best && !options_.accept.keep_best)) {
     if (out_of_time(out)) break;
+    // The region whose next starting pose fits best (the first of equals: parts come largest first).
+    std::size_t r = regions.size();
+    for (std::size_t i = 0; i < regions.size(); ++i) {
+      if (next[i] < end[i] && (r == regions.size() || regions[i].candidates[next[i]].fit > regions[r].candidates[next[r]].fit)) r = i;
+    }
+    if (r == regions.size()) break;
     which.clear();
-    for (; next < budget && which.size() < batch; ++next) which.push_back(next);
-    std::optional<Detection> det = try_candidates(*region, which, options_.accept.keep_best, frame, out);
-    if (det && (!best || det->verification.score > best->verification.score)) best = std::move(det);
+    for (; next[r] < end[r] && which.size() < batch && spent < budget; ++next[r], ++spent) which.push_back(next[r]);
+    std::optional<Detection> det = try_candidates(regions[r], which, options_.accept.keep_best, frame, out);
+    if (det && (!best || det->verification.score > best->verification.score)) {
+      best = std::move(det);
+      best_region = r;
+    }
   }
   if (!best) return best;
-  if (!options_.accept.keep_best && options_.match.challenger_views > 0) challenge(*region, next, budget, *best, frame, out);
-  if (options_.accept.try_half_turns && !out_of_time(out)) turn_if_better(*region, *best, frame, out);
+  const Region& region = regions[best_region];
+  if (!options_.accept.keep_best && options_.match.challenger_views > 0) challenge(region, next[best_region], end[best_region], *best, frame, out);
+  if (options_.accept.try_half_turns && !out_of_time(out)) turn_if_better(region, *best, frame, out);
   if (options_.accept.canonical_poses) {
     // Of the poses the object's symmetries make equivalent, always the same one.
     best->T_camera_object = canonical_pose(best->T_camera_object, db_.objects[best->object_index].symmetries);

@@ -245,7 +245,9 @@ TEST(Recognize, ARegionOfNothingKnownCostsAtMostItsBudget) {
     EXPECT_TRUE(r.detections.empty());
     ASSERT_GT(r.regions, 0u);
     const std::size_t batches = (budget + o.run.batch - 1) / o.run.batch;
-    EXPECT_LE(r.hypotheses, r.regions * (budget + 3 * batches));
+    // One budget for each cluster whole, and one for the convex parts of each it splits.
+    EXPECT_LE(r.hypotheses, (r.clusters + r.split_clusters) * (budget + 3 * batches));
+    EXPECT_LE(r.clusters + r.split_clusters, r.regions);
     EXPECT_GE(r.hypotheses, r.regions) << "every region tries something";
     EXPECT_LT(r.hypotheses, all.hypotheses / 2) << "exhaustive: " << all.hypotheses << " over " << all.regions << " regions";
   }

@@ -261,6 +261,9 @@ class Recognizer {
   // with normals.
   std::optional<Region> describe_region(const PointCloud& points, const Frame& frame, const VerifyOptions& verify,
                                         Recognition& out) const;
+  // The regions' starting poses tried best coarse fit first across them, within one budget (the
+  // convex parts of a cluster share it); the first accepted (or the best), challenged and turned.
+  std::optional<Detection> search(const std::vector<Region>& regions, const Frame& frame, Recognition& out) const;
   // Every roll of every matched view as a starting pose, best coarse fit first.
   std::vector<Candidate> rank_candidates(const Region& region, Recognition& out) const;
   // The starting poses `which` (indices into region.candidates), refined and verified together: the
