@@ -50,9 +50,10 @@ struct MatchOptions {
   /// from this many points each way), best first, and refined and verified in that order.
   float fit_cell_m = 0.01f;
   std::size_t fit_points = 64;
-  /// At most this many starting poses are refined and verified per region (0: all of them, as the
-  /// thesis did). The search is a budget, not exhaustive: a region of nothing known (most of a real
-  /// frame) costs every pose it is given. Chosen by measurement (make results, docs/RESULTS.md):
+  /// At most this many starting poses are refined and verified per region, the convex parts of a
+  /// split cluster sharing one (0: all of them, as the thesis did). The search is a budget, not
+  /// exhaustive: a region of nothing known (most of a real frame) costs every pose it is given.
+  /// Chosen by measurement (make results with --budget 0, 24 and 48, side by side):
   /// at 48 every set found what the exhaustive search found (real YCB-Video 89 % ADD-S, simulated
   /// rooms 88 %, the seed experiment 100 % at 0.75 m) but one seed-room frame at 2 m, at a quarter
   /// of its time (real YCB-Video median 0.76 -> 0.19 s); at 24 the seed experiment lost a frame at
