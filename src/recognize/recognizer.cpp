@@ -354,22 +354,16 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
   return candidates;
 }
 
-std::vector<Transform> Recognizer::half_turns(const Transform& T_camera_object, std::uint32_t object) const {
+std::vector<Recognizer::Hypothesis> Recognizer::half_turns(const Transform& T_camera_object, std::uint32_t object) const {
   // Half a turn about each of the object's own axes, through its box centre.
   const BoundingBox box = bounding_box(db_.objects[object].model_points);
   const Eigen::Vector3d centre = (0.5f * (box.min + box.max)).cast<double>();
-  std::vector<Transform> turned;
+  std::vector<Hypothesis> turned;
   for (int axis = 0; axis < 3; ++axis) {
     const Eigen::Matrix3d R = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::Unit(axis)).toRotationMatrix();
-    turned.push_back(T_camera_object * make_transform(R, centre - R * centre));
+    turned.push_back({object, T_camera_object * make_transform(R, centre - R * centre)});
   }
   return turned;
-}
-
-std::vector<Recognizer::Hypothesis> Recognizer::turned_hypotheses(const Transform& T_camera_object, std::uint32_t object) const {
-  std::vector<Hypothesis> out;
-  for (const Transform& T : half_turns(T_camera_object, object)) out.push_back({object, T});
-  return out;
 }
 
 Detection Recognizer::detection_from(const Refined& h, const Region& region, const Candidate& c) const {
@@ -422,7 +416,7 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
   if (!found && nearest_miss && !out_of_time(out)) {
     // Nothing passed, but one pose failed only by seeing through it: try it turned about its axes.
     const Candidate& c = region.candidates[which[nearest_miss_at]];
-    const std::vector<Refined> turned = refine_and_verify(turned_hypotheses(nearest_miss->T_camera_object, c.object),
+    const std::vector<Refined> turned = refine_and_verify(half_turns(nearest_miss->T_camera_object, c.object),
                                                           region.icp_source, d.cloud.points, frame, region.verify, out.times);
     out.hypotheses += turned.size();
     for (const Refined& h : turned) {
@@ -453,7 +447,7 @@ void Recognizer::challenge(const Region& region, std::size_t next, std::size_t e
 void Recognizer::turn_if_better(const Region& region, Detection& best, const Frame& frame, Recognition& out) const {
   // The pose turned about the object's own axes, each refined and verified; the best is kept, and
   // the runner-up's score says by how much it won.
-  const std::vector<Refined> turned = refine_and_verify(turned_hypotheses(best.T_camera_object, best.object_index),
+  const std::vector<Refined> turned = refine_and_verify(half_turns(best.T_camera_object, best.object_index),
                                                         region.icp_source, region.description.cloud.points, frame,
                                                         region.verify, out.times);
   out.hypotheses += turned.size();

@@ -278,7 +278,6 @@ class Recognizer {
                  Recognition& out) const;
   // `best` turned half a turn about each of its axes; the best of the four is kept.
   void turn_if_better(const Region& region, Detection& best, const Frame& frame, Recognition& out) const;
-  std::vector<Transform> half_turns(const Transform& T_camera_object, std::uint32_t object) const;
   Detection detection_from(const Refined& h, const Region& region, const Candidate& c) const;
   // A cluster, or what is left of one: recognized whole, else split into convex parts; once a part
   // is recognized, its object's points are taken away and the rest recognized again (depth + 1).
@@ -314,8 +313,8 @@ class Recognizer {
                                          std::span<const Eigen::Vector3f> cluster, const Frame& frame,
                                          const VerifyOptions& verify, StageTimes& times,
                                          const std::vector<std::vector<Transform>>* refused = nullptr) const;
-  // `T_camera_object`'s half turns, as hypotheses of `object`.
-  std::vector<Hypothesis> turned_hypotheses(const Transform& T_camera_object, std::uint32_t object) const;
+  // `T_camera_object` turned half a turn about each of `object`'s axes, as hypotheses of it.
+  std::vector<Hypothesis> half_turns(const Transform& T_camera_object, std::uint32_t object) const;
   // What ICP and verification need of an object, made on its first hypothesis: a database of a
   // thousand objects costs nothing for the objects a scene never suggests.
   struct PreparedObject {
