@@ -110,6 +110,17 @@ void BM_VfhAndCrh(benchmark::State& state) {
 }
 BENCHMARK(BM_VfhAndCrh)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The rolls of the cluster against every view of the jug's database (a real frame's region is
+// matched to 20 views of each object: 140 roll searches for a database of seven).
+void BM_CrhRollsAllViews(benchmark::State& state) {
+  const Inputs& in = inputs();
+  for (auto _ : state) {
+    for (const ViewEntry& view : in.db.views) benchmark::DoNotOptimize(crh_roll_angles(view.crh, in.description.crh));
+  }
+  state.SetLabel(std::to_string(in.db.views.size()) + " views");
+}
+BENCHMARK(BM_CrhRollsAllViews)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
 // Matching one cluster against 1000 objects x 80 views: through the index, and exhaustively.
 const ViewDatabase& thousand_objects() {
   static const ViewDatabase db = scaled_database(inputs().db, 1000, 3);
