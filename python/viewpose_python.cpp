@@ -184,21 +184,24 @@ PYBIND11_MODULE(viewpose, m) {
 
   py::class_<Recognizer>(m, "Recognizer", "Recognizes the database's objects in depth frames")
       .def(py::init([](std::shared_ptr<ViewDatabase> db, bool keep_best, bool split_touching, std::size_t matches,
-                       std::size_t budget, double deadline_ms, std::optional<double> min_score) {
+                       std::size_t budget, std::size_t screen, double deadline_ms, std::optional<double> min_score) {
              RecognizerOptions o;
              o.accept.keep_best = keep_best;
              o.split.enabled = split_touching;
              o.match.per_object = matches;
              o.match.max_hypotheses = budget;
+             o.match.prescreen = screen;
              o.run.deadline_ms = deadline_ms;
              if (min_score) o.accept.min_confidence = *min_score;
              return std::make_unique<Recognizer>(std::shared_ptr<const ViewDatabase>(std::move(db)), o);
            }),
            py::arg("db"), py::kw_only(), py::arg("keep_best") = false, py::arg("split_touching") = true,
            py::arg("matches") = RecognizerOptions{}.match.per_object,
-           py::arg("budget") = RecognizerOptions{}.match.max_hypotheses, py::arg("deadline_ms") = 0.0, py::arg("min_score") = py::none(),
+           py::arg("budget") = RecognizerOptions{}.match.max_hypotheses, py::arg("screen") = RecognizerOptions{}.match.prescreen,
+           py::arg("deadline_ms") = 0.0, py::arg("min_score") = py::none(),
            "Options as `viewpose recognize` has them: keep_best, split_touching (--no-split is False), matches, "
-           "budget (0: every starting pose), deadline_ms (0: none), min_score (None: the default threshold)")
+           "budget (0: every starting pose), screen (0: coarse fit order only), deadline_ms (0: none), min_score "
+           "(None: the default threshold)")
       .def(
           "recognize",
           [](const Recognizer& r, const py::array& depth, const std::tuple<double, double, double, double>& K,

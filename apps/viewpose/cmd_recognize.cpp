@@ -46,6 +46,7 @@ struct RecognizeFlags {
   bool no_split = false;
   std::size_t matches = 20;
   std::size_t budget = RecognizerOptions{}.match.max_hypotheses;
+  std::size_t screen = RecognizerOptions{}.match.prescreen;
   double deadline_ms = 0;
   double min_score = -1;  // < 0: the recognizer's default
   bool no_times = false;
@@ -56,8 +57,14 @@ struct RecognizeFlags {
                  "Do not split clusters in which nothing is found at concave creases (touching objects); faster");
     cmd.add_option("--matches", matches, "Nearest views tried per cluster")->check(CLI::Range(1, 1000))->capture_default_str();
     cmd.add_option("--budget", budget,
-                   "Starting poses refined and verified per cluster at most, best coarse fit first (0: every view's "
-                   "every roll, as the thesis did; slower, and rarely finds more)")
+                   "Starting poses refined and verified per cluster at most, best first (0: every view's every roll, "
+                   "as the thesis did; slower, and rarely finds more)")
+        ->check(CLI::Range(0, 1000000))
+        ->capture_default_str();
+    cmd.add_option("--screen", screen,
+                   "Starting poses per cluster screened by a short ICP, which orders them for --budget by where they "
+                   "lead (the first few are tried in coarse fit order before it; 0: coarse fit order only)")
+        ->check(CLI::Range(0, 1000000))
         ->capture_default_str();
     cmd.add_option("--deadline-ms", deadline_ms,
                    "Stop trying poses after this long per frame and report what is verified, marked cut short (0: no limit)")
@@ -77,6 +84,7 @@ struct RecognizeFlags {
     o.split.enabled = !no_split;
     o.match.per_object = matches;
     o.match.max_hypotheses = budget;
+    o.match.prescreen = screen;
     o.run.deadline_ms = deadline_ms;
     if (min_score >= 0) o.accept.min_confidence = min_score;
     return o;

@@ -95,10 +95,14 @@ def test_a_budget_of_starting_poses_is_an_option(scene):
     db = viewpose.ViewDatabase.load(scene["db"])
     png, _ = scene["frames"][0]
     depth = viewpose.read_depth_png(png)
-    for budget in (0, 4):  # every starting pose, and the best four by coarse fit
+    for budget in (0, 4):  # every starting pose, and the best four
         assert len(viewpose.Recognizer(db, budget=budget).recognize(depth, K=scene["K"])) == 1
+    for screen in (0, 16):  # coarse fit order only, and 16 screened by a short ICP
+        assert len(viewpose.Recognizer(db, budget=4, screen=screen).recognize(depth, K=scene["K"])) == 1
     with pytest.raises(TypeError):
         viewpose.Recognizer(db, budget=-1)
+    with pytest.raises(TypeError):
+        viewpose.Recognizer(db, screen=-1)
 
 
 def test_the_recognizer_keeps_its_database(scene):

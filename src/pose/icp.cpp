@@ -16,24 +16,58 @@ const NearestGrid& IcpTarget::grid(float cell_m, float margin_m) const {
   return *grid_;
 }
 
+namespace {
+
+// An even subset: every k-th point, k chosen so that at most max_source_points remain (all of them
+// when they are fewer, or max_source_points is 0).
+std::span<const Eigen::Vector3f> even_subset(std::span<const Eigen::Vector3f> all, const IcpOptions& o,
+                                             std::vector<Eigen::Vector3f>& subset) {
+  if (o.max_source_points == 0 || all.size() <= o.max_source_points) return all;
+  const double step = static_cast<double>(all.size()) / static_cast<double>(o.max_source_points);
+  subset.reserve(o.max_source_points);
+  for (std::size_t i = 0; i < o.max_source_points; ++i) subset.push_back(all[static_cast<std::size_t>(static_cast<double>(i) * step)]);
+  return subset;
+}
+
+// The target's nearest point: from its grid (IcpOptions::grid_cell_m) or its k-d tree.
+struct Nearest {
+  Nearest(const IcpTarget& t, const IcpOptions& o) : target(t), grid(o.grid_cell_m > 0 ? &t.grid(o.grid_cell_m, o.reach_m()) : nullptr) {}
+  bool operator()(const Eigen::Vector3f& p, std::uint32_t& k, float& d2) const {
+    return grid ? grid->nearest(p, k, d2) : target.tree.nearest(p, k, d2);
+  }
+  const IcpTarget& target;
+  const NearestGrid* grid;
+};
+
+}  // namespace
+
+double icp_fitness(std::span<const Eigen::Vector3f> all_source, const IcpTarget& target, const Transform& T_target_source,
+                   float max_distance_m, const IcpOptions& o) {
+  if (all_source.empty() || target.points.empty()) return 0;
+  std::vector<Eigen::Vector3f> subset;
+  const std::span<const Eigen::Vector3f> source = even_subset(all_source, o, subset);
+  const Nearest nearest(target, o);
+  const Eigen::Matrix3f R = T_target_source.linear().cast<float>();
+  const Eigen::Vector3f t = T_target_source.translation().cast<float>();
+  const float max_d2 = max_distance_m * max_distance_m;
+  std::size_t count = 0;
+  for (const Eigen::Vector3f& s : source) {
+    std::uint32_t k;
+    float d2;
+    // As an ICP step counts its correspondences: a finite point whose nearest has a normal.
+    if (s.allFinite() && nearest(R * s + t, k, d2) && d2 <= max_d2 && target.normals[k].allFinite()) ++count;
+  }
+  return static_cast<double>(count) / static_cast<double>(source.size());
+}
+
 IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const IcpTarget& target,
                              const Transform& T_initial, const IcpOptions& o) {
   IcpResult result;
   result.T_target_source = T_initial;
   if (all_source.empty() || target.points.empty()) return result;
-  // An even subset: every k-th point, k chosen so that at most max_source_points remain.
   std::vector<Eigen::Vector3f> subset;
-  std::span<const Eigen::Vector3f> source = all_source;
-  if (o.max_source_points > 0 && all_source.size() > o.max_source_points) {
-    const double step = static_cast<double>(all_source.size()) / static_cast<double>(o.max_source_points);
-    subset.reserve(o.max_source_points);
-    for (std::size_t i = 0; i < o.max_source_points; ++i) subset.push_back(all_source[static_cast<std::size_t>(static_cast<double>(i) * step)]);
-    source = subset;
-  }
-  const NearestGrid* grid = o.grid_cell_m > 0 ? &target.grid(o.grid_cell_m, o.reach_m()) : nullptr;
-  const auto nearest = [&](const Eigen::Vector3f& p, std::uint32_t& k, float& d2) {
-    return grid ? grid->nearest(p, k, d2) : target.tree.nearest(p, k, d2);
-  };
+  const std::span<const Eigen::Vector3f> source = even_subset(all_source, o, subset);
+  const Nearest nearest(target, o);
   for (std::size_t stage = 0; stage < o.max_correspondence_m.size(); ++stage) {
     const float max_d = o.max_correspondence_m[stage];
     const float max_d2 = max_d * max_d;

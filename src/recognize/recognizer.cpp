@@ -315,6 +315,37 @@ std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& 
   return region;
 }
 
+void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) const {
+  const MatchOptions& m = options_.match;
+  region.screened = true;
+  if (from >= region.candidates.size() || region.icp_source.empty()) return;
+  const std::size_t n = std::min(m.prescreen, region.candidates.size() - from);
+  const auto t = Clock::now();
+  // The schedule's coarse stages, few steps on few points: where the pose leads. Judged by the
+  // share of the region it brings within the final stage's reach (at the second stage's 2 cm most
+  // poses of the right size bring nearly all of it: no order).
+  IcpOptions screen = options_.icp;
+  const float fine_m = screen.max_correspondence_m.empty() ? 0.01f : screen.max_correspondence_m.back();
+  if (screen.max_correspondence_m.size() > 1) screen.max_correspondence_m.pop_back();
+  screen.max_iterations_per_stage = m.prescreen_iterations;
+  screen.max_source_points = m.prescreen_points;
+  screen.min_fitness_after_first_stage = 0;
+  const auto first = region.candidates.begin() + static_cast<std::ptrdiff_t>(from);
+  for (auto c = first; c != first + static_cast<std::ptrdiff_t>(n); ++c) prepared(c->object);  // (each object once)
+  const auto count = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for schedule(dynamic, 4) if (options_.run.parallel_hypotheses)
+  for (std::ptrdiff_t k = 0; k < count; ++k) {
+    Candidate& c = first[k];
+    const IcpTarget& target = icp_target(c.object);
+    const IcpResult r = icp_point_to_plane(region.icp_source, target, c.T_camera_object.inverse(), screen);
+    c.screened = icp_fitness(region.icp_source, target, r.T_target_source, fine_m, screen);
+  }
+  // Best screened first; equals keep their coarse-fit order. The unscreened rest keep theirs after.
+  std::stable_sort(first, first + count, [](const Candidate& a, const Candidate& b) { return a.screened > b.screened; });
+  out.screened += n;
+  out.times.icp_ms += ms_since(t);
+}
+
 std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& region, Recognition& out) const {
   const auto t0 = Clock::now();
   const Description& d = region.description;
@@ -475,24 +506,33 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
   return search(regions, frame, out);
 }
 
-std::optional<Detection> Recognizer::search(const std::vector<Region>& regions, const Frame& frame, Recognition& out) const {
-  // The starting poses of every region, best coarse fit first across them, a batch at a time from
-  // one region, until one passes or the budget is spent (with keep_best: all of them, the best
-  // kept). The regions share the budget: the convex parts of one cluster compete for it.
+std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const Frame& frame, Recognition& out) const {
+  // The starting poses of every region, best first across them (by the screen, else coarse fit), a
+  // batch at a time from one region, until one passes or the budget is spent (with keep_best: all
+  // of them, the best kept). The regions share the budget: the parts of one cluster compete for it.
   const bool every = options_.accept.keep_best || options_.match.max_hypotheses == 0;
   const std::size_t budget = every ? std::numeric_limits<std::size_t>::max() : options_.match.max_hypotheses;
   std::vector<std::size_t> next(regions.size(), 0), end(regions.size());
   for (std::size_t r = 0; r < regions.size(); ++r) end[r] = std::min(regions[r].candidates.size(), budget);
   const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
+  // The short ICP's screen (prescreen): a region alone is screened only once its first batch, in
+  // coarse fit order, has failed (most recognized regions pass in it); the parts of a split
+  // cluster, ranked against each other, all at once by the same measure. The exhaustive search
+  // (and keep_best) tries every pose anyway: no order to choose.
+  const bool screen = !every && options_.match.prescreen > 0;
+  if (screen && regions.size() > 1) {
+    for (Region& region : regions) prescreen(region, 0, out);
+  }
   std::optional<Detection> best;
   std::size_t best_region = 0, spent = 0;
   std::vector<std::size_t> which;
   while (spent < budget && !(best && !options_.accept.keep_best)) {
     if (out_of_time(out)) break;
-    // The region whose next starting pose fits best (the first of equals: parts come largest first).
+    if (screen && regions.size() == 1 && !regions[0].screened && next[0] > 0) prescreen(regions[0], next[0], out);
+    // The region whose next starting pose ranks best (the first of equals: parts come largest first).
     std::size_t r = regions.size();
     for (std::size_t i = 0; i < regions.size(); ++i) {
-      if (next[i] < end[i] && (r == regions.size() || regions[i].candidates[next[i]].fit > regions[r].candidates[next[r]].fit)) r = i;
+      if (next[i] < end[i] && (r == regions.size() || regions[i].candidates[next[i]].priority() > regions[r].candidates[next[r]].priority())) r = i;
     }
     if (r == regions.size()) break;
     which.clear();

@@ -58,6 +58,35 @@ TEST(Icp, GridAndTreeCorrespondencesBothRecoverAKnownPose) {
   }
 }
 
+TEST(Icp, FitnessAtAPoseIsTheShareWithinReach) {
+  // The box's top face as the source, lifted off it by 6 mm: none within 5 mm, all within 7.5 mm
+  // (the grid finds a point at most a cell diagonal farther than the nearest, so the tree is asked
+  // too); with a quarter of it lifted by 3 cm, a quarter is out of reach; at the pose that puts it
+  // back, all of it is on the surface.
+  std::vector<Eigen::Vector3f> points, normals;
+  box_surface(points, normals);
+  const IcpTarget target(points, normals);
+  std::vector<Eigen::Vector3f> top;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (normals[i].z() > 0.5f) top.push_back(points[i] + Eigen::Vector3f(0, 0, 0.006f));
+  ASSERT_GT(top.size(), 400u);
+  for (const float cell : {0.0f, 0.003f}) {
+    SCOPED_TRACE(cell);
+    IcpOptions o;
+    o.grid_cell_m = cell;
+    const Transform I = Transform::Identity();
+    EXPECT_DOUBLE_EQ(icp_fitness(top, target, I, 0.005f, o), 0.0);
+    EXPECT_DOUBLE_EQ(icp_fitness(top, target, I, 0.0075f + (cell > 0 ? 0.0052f : 0.0f), o), 1.0);
+    EXPECT_DOUBLE_EQ(icp_fitness(top, target, make_transform(Eigen::Matrix3d::Identity(), {0, 0, -0.006}), 0.001f + (cell > 0 ? 0.0052f : 0.0f), o), 1.0);
+    std::vector<Eigen::Vector3f> some = top;
+    for (std::size_t i = 0; i < some.size(); i += 4) some[i].z() += 0.03f;
+    o.max_source_points = 0;  // every point, so that the share is exact
+    const double lifted = static_cast<double>((some.size() + 3) / 4) / static_cast<double>(some.size());
+    EXPECT_NEAR(icp_fitness(some, target, make_transform(Eigen::Matrix3d::Identity(), {0, 0, -0.006}), 0.01f, o), 1.0 - lifted, 1e-12);
+  }
+  EXPECT_EQ(icp_fitness({}, target, Transform::Identity(), 0.01f), 0.0);
+}
+
 TEST(Icp, LostHypothesesAreDroppedEarlyNotRefined) {
   std::vector<Eigen::Vector3f> points, normals;
   box_surface(points, normals);

@@ -68,4 +68,10 @@ struct IcpTarget {
 IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> source, const IcpTarget& target,
                              const Transform& T_target_source_initial, const IcpOptions& options = {});
 
+/// ICP's fitness at a pose, without a step: the share of `source` (the points ICP would take,
+/// options.max_source_points of them evenly spread) within `max_distance_m` of the target, looked
+/// up as ICP looks it up (options.grid_cell_m).
+double icp_fitness(std::span<const Eigen::Vector3f> source, const IcpTarget& target, const Transform& T_target_source,
+                   float max_distance_m, const IcpOptions& options = {});
+
 }  // namespace viewpose
