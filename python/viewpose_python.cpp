@@ -162,6 +162,8 @@ PYBIND11_MODULE(viewpose, m) {
       .def_readonly("clusters", &Recognition::clusters)
       .def_readonly("hypotheses", &Recognition::hypotheses)
       .def_readonly("repeats", &Recognition::repeats)
+      .def_readonly("screened", &Recognition::screened)
+      .def_readonly("regions", &Recognition::regions)
       .def_property_readonly("times_ms",
                              [](const Recognition& r) {
                                const StageTimes& t = r.times;

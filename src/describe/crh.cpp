@@ -14,6 +14,9 @@ namespace {
 constexpr int kBins = 90;
 constexpr double kPi = std::numbers::pi;
 
+// The harmonics a CRH spectrum holds, by row: 0 to 44, then the Nyquist term at 89.
+constexpr int harmonic(int row) { return row < kBins / 2 ? row : kBins - 1; }
+
 // PCL's rotation taking the ray through `centroid` to the z axis, built as CRHEstimation builds it.
 template <typename Scalar>
 Eigen::Matrix<Scalar, 3, 3> ray_rotation(const Eigen::Matrix<Scalar, 3, 1>& centroid) {
@@ -70,7 +73,8 @@ std::vector<float> crh_roll_angles(const Crh& view, const Crh& scene, const Roll
     const std::complex<float> a(view[static_cast<std::size_t>(2 * k - 1)], -view[static_cast<std::size_t>(2 * k)]);
     const std::complex<float> b(scene[static_cast<std::size_t>(2 * k - 1)], scene[static_cast<std::size_t>(2 * k)]);
     const std::complex<float> ab = a * b;
-    // |ab| as glibc's hypotf computes it (in double, rounded once), without the call.
+    // |ab| as glibc's hypotf computes it (in double, rounded once), without the call (the test
+    // against std::abs holds it to that, with glibc).
     const float magnitude = static_cast<float>(std::sqrt(static_cast<double>(ab.real()) * ab.real() + static_cast<double>(ab.imag()) * ab.imag()));
     product[static_cast<std::size_t>(k)] = magnitude > 0 ? std::complex<double>(ab / magnitude) : 0.0;
   }
@@ -82,11 +86,10 @@ std::vector<float> crh_roll_angles(const Crh& view, const Crh& scene, const Roll
   // lag's sum still adds the harmonics in order, and the rows are read in a stream the compiler
   // vectorizes (a table of the 180 roots indexed by k n mod 180 read six times slower).
   constexpr int kHarmonics = kBins / 2 + 1;
-  const auto harmonic = [](int row) { return row < kBins / 2 ? row : kBins - 1; };
   struct Table {
     std::array<std::array<double, kLags>, kHarmonics> cos{}, sin{};
   };
-  static const Table table = [&] {
+  static const Table table = [] {
     Table t;
     for (int row = 0; row < kHarmonics; ++row)
       for (int n = 0; n < kLags; ++n) {

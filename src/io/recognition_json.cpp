@@ -31,7 +31,7 @@ nlohmann::json recognition_json(const Recognition& r, bool with_times) {
                                       {"model_relief_m", d.verification.model_relief_m}}}});
   }
   nlohmann::json j = {{"detections", dets}, {"cut_short", r.cut_short}, {"clusters", r.clusters},
-                      {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses}, {"repeats", r.repeats},
+                      {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses}, {"repeats", r.repeats}, {"screened", r.screened},
                       {"dropped_as_explained", r.dropped_as_explained}};
   if (with_times) {
     const StageTimes& t = r.times;

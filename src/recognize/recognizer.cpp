@@ -317,8 +317,9 @@ std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& 
 
 void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) const {
   const MatchOptions& m = options_.match;
-  region.screened = true;
-  if (from >= region.candidates.size() || region.icp_source.empty()) return;
+  region.screen_done = true;
+  // Past the deadline the search stops at its next step anyway: no screen to spend time on.
+  if (from >= region.candidates.size() || region.icp_source.empty() || out_of_time(out)) return;
   const std::size_t n = std::min(m.prescreen, region.candidates.size() - from);
   const auto t = Clock::now();
   // The schedule's coarse stages, few steps on few points: where the pose leads. Judged by the
@@ -337,11 +338,13 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
   for (std::ptrdiff_t k = 0; k < count; ++k) {
     Candidate& c = first[k];
     const IcpTarget& target = icp_target(c.object);
+    // The grid keeps the sizes of its first use: the full schedule's reach, not the screen's.
+    if (options_.icp.grid_cell_m > 0) target.grid(options_.icp.grid_cell_m, options_.icp.reach_m());
     const IcpResult r = icp_point_to_plane(region.icp_source, target, c.T_camera_object.inverse(), screen);
-    c.screened = icp_fitness(region.icp_source, target, r.T_target_source, fine_m, screen);
+    c.screen_fitness = icp_fitness(region.icp_source, target, r.T_target_source, fine_m, screen);
   }
   // Best screened first; equals keep their coarse-fit order. The unscreened rest keep theirs after.
-  std::stable_sort(first, first + count, [](const Candidate& a, const Candidate& b) { return a.screened > b.screened; });
+  std::stable_sort(first, first + count, [](const Candidate& a, const Candidate& b) { return a.screen_fitness > b.screen_fitness; });
   out.screened += n;
   out.times.icp_ms += ms_since(t);
 }
@@ -517,7 +520,7 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
   const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
   // The short ICP's screen (prescreen): a region alone is screened only once its first batch, in
   // coarse fit order, has failed (most recognized regions pass in it); the parts of a split
-  // cluster, ranked against each other, all at once by the same measure. The exhaustive search
+  // cluster (when there are two or more), ranked against each other, all at once by one measure. The exhaustive search
   // (and keep_best) tries every pose anyway: no order to choose.
   const bool screen = !every && options_.match.prescreen > 0;
   if (screen && regions.size() > 1) {
@@ -528,7 +531,7 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
   std::vector<std::size_t> which;
   while (spent < budget && !(best && !options_.accept.keep_best)) {
     if (out_of_time(out)) break;
-    if (screen && regions.size() == 1 && !regions[0].screened && next[0] > 0) prescreen(regions[0], next[0], out);
+    if (screen && regions.size() == 1 && !regions[0].screen_done && next[0] > 0) prescreen(regions[0], next[0], out);
     // The region whose next starting pose ranks best (the first of equals: parts come largest first).
     std::size_t r = regions.size();
     for (std::size_t i = 0; i < regions.size(); ++i) {

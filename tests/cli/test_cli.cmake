@@ -129,11 +129,13 @@ run(TRUE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000
 expect_in("${OUT}" "cut short by the deadline")
 file(READ "${WORK}/late.json" json)
 expect_in("${json}" "\"cut_short\": true")
-# The search's knobs: coarse fit order only (--screen 0) within a small budget still finds the jug;
-# a negative count is a usage error.
+# The search's knobs: coarse fit order only (--screen 0, nothing screened) within a small budget
+# still finds the jug; a negative count is a usage error.
 run(TRUE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json"
-    --budget 4 --screen 0)
+    --budget 8 --screen 0 --json "${WORK}/unscreened.json")
 expect_in("${OUT}" "jug (id 1): position")
+file(READ "${WORK}/unscreened.json" json)
+expect_in("${json}" "\"screened\": 0")
 run(FALSE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json" --screen -1)
 run(FALSE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json" --budget -1)
 # The score is a probability: nothing is certain, so --min-score 1 reports nothing; out of 0..1 is a usage error.

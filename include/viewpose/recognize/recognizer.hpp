@@ -57,12 +57,13 @@ struct MatchOptions {
   /// the order of the share of the region each brought within the final stage's reach of the model
   /// (ties: coarse fit). Coarse fit judges where a pose starts, and a right view whose CRH roll is a
   /// little off starts poorly; the screen judges where it leads. (The parts of a split cluster are
-  /// screened all at once, to be ranked against each other by the same measure.) Measured with every
-  /// pose of every region refined and verified, then ranked either way: the first right pose was
-  /// within the first 12 screened of 48 on every real YCB-Video frame and mOSD's and in the seed
-  /// room, in 28 of 29 regions in the simulated rooms; in coarse fit order within the first 48.
-  /// With a budget of 12 (make results, against 48 in coarse fit order): the same poses found on
-  /// every set, real YCB-Video frames 0.20 -> 0.11 s median, rooms 0.34 -> 0.17 s.
+  /// screened all at once, to be ranked against each other by the same measure.) Measured first
+  /// with every pose of every region refined and verified, then ranked either way: with all 48
+  /// screened from the start, the first right pose was within the first 12 on every real YCB-Video
+  /// frame and mOSD's and in the seed room, in 28 of 29 regions of the simulated rooms; in coarse
+  /// fit order it lay as late as the 37th. Then as shipped (four in coarse fit order, then eight
+  /// screened of the next 48; make results against 48 in coarse fit order): the same poses found on
+  /// every set, real YCB-Video frames 0.20 -> 0.11 s median, rooms 0.34 -> 0.22 s.
   std::size_t prescreen = 48;
   std::size_t prescreen_points = 100;
   int prescreen_iterations = 8;
@@ -255,8 +256,9 @@ class Recognizer {
     float roll_deg = 0;
     Transform T_camera_object = Transform::Identity();
     double fit = 0;  // coarse_fit
-    double screened = -1;  // the short ICP's share of the region brought onto the model (-1: not screened)
-    double priority() const { return screened >= 0 ? screened : fit; }
+    double screen_fitness = -1;  // the short ICP's share of the region brought onto the model (-1: not screened)
+    // Screened poses rank above every unscreened one (a share and a coarse fit are not comparable).
+    double priority() const { return screen_fitness >= 0 ? 1.0 + screen_fitness : fit; }
   };
   // What every pose tried for one region needs: its description, its nearest views and the starting
   // poses they give (best coarse fit first), its ICP copy, and the bounds its poses are verified with.
@@ -270,7 +272,7 @@ class Recognizer {
     VerifyOptions verify;
     VerifyOptions near_miss;  // verify with the looser conflict bound of a pose the wrong way round
     bool try_near_misses = false;
-    bool screened = false;  // prescreen has ordered its candidates
+    bool screen_done = false;  // prescreen has ordered its candidates
     // By object, the refined poses verification refused so far (try_candidates skips their
     // repeats). A region's batches are tried one after another, on the calling thread.
     mutable std::vector<std::vector<Transform>> refused;
