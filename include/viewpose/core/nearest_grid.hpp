@@ -28,16 +28,22 @@ class NearestGrid {
 
   /// The point held by the query's cell and its squared distance to the query; false outside the grid.
   bool nearest(const Eigen::Vector3f& query, std::uint32_t& index, float& squared_distance) const {
+    if (!held(query, index)) return false;
+    squared_distance = (points_[index] - query).squaredNorm();
+    return true;
+  }
+  /// The index of the point held by the query's cell, without reading the point; false outside the
+  /// grid. (For callers that keep their own copy of the points beside other data.)
+  bool held(const Eigen::Vector3f& query, std::uint32_t& index) const {
     if (!cells_) return false;
     const Eigen::Vector3f c = (query - origin_) * inv_cell_;
     if (!(c.x() >= 0 && c.y() >= 0 && c.z() >= 0)) return false;  // NaN fails too
     const auto x = static_cast<std::uint32_t>(c.x()), y = static_cast<std::uint32_t>(c.y()), z = static_cast<std::uint32_t>(c.z());
     if (x >= nx_ || y >= ny_ || z >= nz_) return false;
     std::atomic<std::uint32_t>& cell = cells_[(static_cast<std::size_t>(z) * ny_ + y) * nx_ + x];
-    std::uint32_t held = cell.load(std::memory_order_relaxed);
-    if (held == 0) held = fill(cell, x, y, z);
-    index = held - 1;
-    squared_distance = (points_[index] - query).squaredNorm();
+    std::uint32_t stored = cell.load(std::memory_order_relaxed);
+    if (stored == 0) stored = fill(cell, x, y, z);
+    index = stored - 1;
     return true;
   }
   /// Cells filled so far.
