@@ -125,10 +125,18 @@ int closed_mesh_winding(const TriangleMesh& mesh) {
     volume += a.dot(b.cross(c));
   }
   std::sort(edges.begin(), edges.end());
-  // Each directed edge once, and its reverse once.
-  if (std::adjacent_find(edges.begin(), edges.end()) != edges.end()) return 0;
-  for (std::uint64_t e : edges) {
-    if (!std::binary_search(edges.begin(), edges.end(), (e << 32) | (e >> 32))) return 0;
+  // Each directed edge as often as its reverse: the surface has no border, and whatever way a line
+  // of sight enters it, it meets a front face first. Edges where four or more triangles meet (a
+  // surface pinched to an edge, as simplifying a mesh leaves a few) pass; an edge with a triangle
+  // repeated, turned the wrong way or missing does not.
+  const auto count = [&](std::uint64_t e) {
+    const auto [first, last] = std::equal_range(edges.begin(), edges.end(), e);
+    return last - first;
+  };
+  for (auto it = edges.begin(); it != edges.end();) {
+    const auto next = std::upper_bound(it, edges.end(), *it);
+    if (next - it != count((*it << 32) | (*it >> 32))) return 0;
+    it = next;
   }
   return volume > 0 ? 1 : volume < 0 ? -1 : 0;
 }

@@ -65,8 +65,25 @@ class TriangleRasterizer {
       C[i] = (su[j] * sv[k] - su[k] * sv[j]) * inv_area;
     }
     const double eps = -1e-9;  // pixel centres on an edge belong to both triangles: no cracks
+    // In a wide triangle, the row's pixels inside all three edges form one run: each edge bounds u
+    // from one side where its A is non-zero. Solved for u, widened by a pixel against rounding, and
+    // then every pixel of the run tested exactly as below: the same pixels as a test of the whole
+    // bounding box row, without the empty half of the box. (A narrow one's box is tested whole: the
+    // run would cost more to find than it saves.)
+    const bool find_runs = u1 - u0 >= 8;
+    std::array<double, 3> inv_A{};
+    for (int i = 0; i < 3; ++i) inv_A[i] = A[i] != 0 ? 1.0 / A[i] : 0.0;
     for (int v = v0; v <= v1; ++v) {
-      for (int u = u0; u <= u1; ++u) {
+      double lo = u0, hi = u1;
+      for (int i = 0; i < 3 && find_runs; ++i) {
+        const double rest = B[i] * v + C[i];
+        if (A[i] > 0) lo = std::max(lo, std::floor((eps - rest) * inv_A[i]) - 1);
+        else if (A[i] < 0) hi = std::min(hi, std::ceil((eps - rest) * inv_A[i]) + 1);
+        else if (rest < eps) hi = lo - 1;  // an edge along the row, with the row outside it
+      }
+      if (!(lo <= hi)) continue;  // (NaN too)
+      const int run0 = static_cast<int>(lo), run1 = static_cast<int>(hi);
+      for (int u = run0; u <= run1; ++u) {
         const double w0 = A[0] * u + B[0] * v + C[0];
         const double w1 = A[1] * u + B[1] * v + C[1];
         const double w2 = A[2] * u + B[2] * v + C[2];

@@ -1,5 +1,9 @@
 #include <cmath>
+#include <array>
 #include <numbers>
+#include <random>
+#include <utility>
+#include <vector>
 #include <string>
 
 #include "test_support.hpp"
@@ -193,6 +197,90 @@ TEST(Rasterizer, ClosedMeshesDrawnWithoutBackFacesGiveTheSamePicture) {
   }
 }
 
+// The textbook rasterizer: every pixel centre of a triangle's bounding box tested against its three
+// edge functions, with the same arithmetic as render(); no near clipping (all triangles in front).
+DepthImage draw_by_bounding_box(const TriangleMesh& mesh, const Transform& T) {
+  DepthImage d(K.width, K.height);
+  struct P {
+    Eigen::Vector3d p;
+    double su, sv, inv_z;
+  };
+  std::vector<P> vs;
+  for (const Eigen::Vector3f& v : mesh.vertices) {
+    const Eigen::Vector3d p = T * v.cast<double>();
+    const double iz = 1.0 / p.z();
+    vs.push_back({p, K.fx * p.x() * iz + K.cx, K.fy * p.y() * iz + K.cy, iz});
+  }
+  for (const auto& t : mesh.triangles) {
+    const std::array<double, 3> su = {vs[t[0]].su, vs[t[1]].su, vs[t[2]].su}, sv = {vs[t[0]].sv, vs[t[1]].sv, vs[t[2]].sv};
+    const std::array<double, 3> iz = {vs[t[0]].inv_z, vs[t[1]].inv_z, vs[t[2]].inv_z};
+    const double area = (su[1] - su[0]) * (sv[2] - sv[0]) - (sv[1] - sv[0]) * (su[2] - su[0]);
+    if (!(std::abs(area) > 1e-12)) continue;
+    const double inv_area = 1.0 / area;
+    std::array<double, 3> A, B, C;
+    for (int i = 0; i < 3; ++i) {
+      const int j = (i + 1) % 3, k = (i + 2) % 3;
+      A[i] = (sv[j] - sv[k]) * inv_area;
+      B[i] = (su[k] - su[j]) * inv_area;
+      C[i] = (su[j] * sv[k] - su[k] * sv[j]) * inv_area;
+    }
+    const int u0 = std::max(0, static_cast<int>(std::ceil(std::min({su[0], su[1], su[2]}))));
+    const int u1 = std::min(K.width - 1, static_cast<int>(std::floor(std::max({su[0], su[1], su[2]}))));
+    const int v0 = std::max(0, static_cast<int>(std::ceil(std::min({sv[0], sv[1], sv[2]}))));
+    const int v1 = std::min(K.height - 1, static_cast<int>(std::floor(std::max({sv[0], sv[1], sv[2]}))));
+    for (int v = v0; v <= v1; ++v)
+      for (int u = u0; u <= u1; ++u) {
+        const double w0 = A[0] * u + B[0] * v + C[0], w1 = A[1] * u + B[1] * v + C[1], w2 = A[2] * u + B[2] * v + C[2];
+        if (w0 < -1e-9 || w1 < -1e-9 || w2 < -1e-9) continue;
+        const double z = 1.0 / (w0 * iz[0] + w1 * iz[1] + w2 * iz[2]);
+        float& depth = d.at(u, v);
+        if (!(z >= depth)) depth = static_cast<float>(z);
+      }
+  }
+  return d;
+}
+
+TEST(Rasterizer, DrawsTheSamePixelsAsTestingEveryPixelOfEachTrianglesBox) {
+  // Triangles of every size and shape, slivers, some reaching beyond the image, and a grid of
+  // squares whose edges and diagonals run through pixel centres (the cases rounding could decide).
+  std::mt19937 rng(20261203);
+  std::uniform_real_distribution<float> xy(-0.6f, 0.6f), z(0.4f, 3.0f), size(0.0005f, 0.3f), unit(-1, 1);
+  TriangleMesh mesh;
+  for (int t = 0; t < 3000; ++t) {
+    const Eigen::Vector3f c(xy(rng), xy(rng), z(rng));
+    const float s = t % 10 == 0 ? 0.5f * size(rng) * size(rng) : size(rng);
+    const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+    for (int k = 0; k < 3; ++k) mesh.vertices.push_back(c + s * Eigen::Vector3f(unit(rng), unit(rng), 0.3f * unit(rng)));
+    if (t % 7 == 0) mesh.vertices.back() = mesh.vertices[base] + 1e-3f * (mesh.vertices[base + 1] - mesh.vertices[base]);  // a sliver
+    mesh.triangles.push_back({base, base + 1, base + 2});
+  }
+  const Transform identity = Transform::Identity();
+  {
+    // Pixel-aligned squares at depth 1 m: their corners project onto pixel centres.
+    const double z0 = 1.0;
+    for (int i = 0; i < 40; ++i) {
+      const double u = 100 + 11 * i, v = 60 + 9 * i, w = 3 + i % 5;
+      const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+      for (const auto& [du, dv] : {std::pair{0.0, 0.0}, {w, 0.0}, {w, w}, {0.0, w}}) {
+        mesh.vertices.push_back(Eigen::Vector3f(static_cast<float>((u + du - K.cx) / K.fx * z0), static_cast<float>((v + dv - K.cy) / K.fy * z0),
+                                                static_cast<float>(z0)));
+      }
+      mesh.triangles.push_back({base, base + 1, base + 2});
+      mesh.triangles.push_back({base, base + 2, base + 3});
+    }
+  }
+  const DepthImage expected = draw_by_bounding_box(mesh, identity);
+  RenderOptions o;
+  o.instances = false;
+  const MeshInstance inst{&mesh, identity};
+  const RenderedFrame f = render(std::span(&inst, 1), K, o);
+  ASSERT_GT(expected.count_valid(), 50000u);
+  for (std::size_t i = 0; i < expected.depth_m.size(); ++i) {
+    const float a = expected.depth_m[i], b = f.depth.depth_m[i];
+    ASSERT_TRUE(a == b || (std::isnan(a) && std::isnan(b))) << "pixel " << i << ": " << a << " against " << b;
+  }
+}
+
 TEST(Rasterizer, OpenOrInconsistentMeshesAreNotClosed) {
   TriangleMesh open = test::square(1.0f);
   EXPECT_EQ(closed_mesh_winding(open), 0);
@@ -204,6 +292,41 @@ TEST(Rasterizer, OpenOrInconsistentMeshesAreNotClosed) {
   for (auto& t : inside_out.triangles) std::swap(t[1], t[2]);
   EXPECT_EQ(closed_mesh_winding(inside_out), -1);
   EXPECT_EQ(closed_mesh_winding(TriangleMesh{}), 0);
+  // One face twice: its edges run more often one way than the other.
+  TriangleMesh repeated = make_box_mesh({0.1f, 0.1f, 0.1f});
+  repeated.triangles.push_back(repeated.triangles[0]);
+  EXPECT_EQ(closed_mesh_winding(repeated), 0);
+  // Two boxes sharing one edge (four faces along it, two each way) bound a solid all the same: seen
+  // from anywhere outside, the front faces hide the back ones, so the back may be skipped.
+  TriangleMesh pinched = make_box_mesh({0.1f, 0.1f, 0.1f});
+  const TriangleMesh other = make_box_mesh({0.1f, 0.1f, 0.1f});
+  const auto shared = [&](const Eigen::Vector3f& v) {
+    // The second box moved by (0.1, 0.1, 0) meets the first along its edge x = y = 0.05.
+    for (std::uint32_t i = 0; i < pinched.vertices.size(); ++i)
+      if ((pinched.vertices[i] - v).norm() < 1e-6f) return i;
+    pinched.vertices.push_back(v);
+    return static_cast<std::uint32_t>(pinched.vertices.size() - 1);
+  };
+  const std::size_t first = pinched.triangles.size();
+  for (const auto& t : other.triangles) {
+    std::array<std::uint32_t, 3> moved{};
+    for (int k = 0; k < 3; ++k) moved[static_cast<std::size_t>(k)] = shared(other.vertices[t[static_cast<std::size_t>(k)]] + Eigen::Vector3f(0.1f, 0.1f, 0));
+    pinched.triangles.push_back(moved);
+  }
+  ASSERT_EQ(pinched.triangles.size(), first + other.triangles.size());
+  ASSERT_LT(pinched.vertices.size(), 16u) << "the boxes share the two ends of an edge";
+  EXPECT_EQ(closed_mesh_winding(pinched), 1);
+  const Transform T = make_transform(Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, -1, 0.5).normalized()).toRotationMatrix(), {0.0, 0.0, 0.7});
+  const RenderedFrame all = render_one(pinched, T);
+  const MeshInstance inst{&pinched, T};
+  RenderOptions culled;
+  culled.closed_winding = 1;
+  const RenderedFrame fronts = render(std::span(&inst, 1), K, culled);
+  ASSERT_GT(all.depth.count_valid(), 1000u);
+  for (std::size_t i = 0; i < all.depth.depth_m.size(); ++i) {
+    const float a = all.depth.depth_m[i], b = fronts.depth.depth_m[i];
+    ASSERT_TRUE(a == b || (std::isnan(a) && std::isnan(b))) << "pixel " << i;
+  }
 }
 
 }  // namespace

@@ -155,5 +155,22 @@ TEST(SimplifyForDrawing, ShapesWithHandlesAndEmptyMeshes) {
   EXPECT_LT(compare(box, simplify_for_drawing(box, 0.0f), kPoses[0]).max_depth_difference, 1e-5f);
 }
 
+TEST(SimplifyForDrawing, FacesStoredTwiceAreDrawnOnceAndTheMeshStaysClosed) {
+  // As the YCB-Video models are stored: every face twice, each copy on vertices of its own. Welded,
+  // the copies are one face; kept both, each edge ran four times one way and the mesh never counted
+  // as closed, so its back faces were drawn as well.
+  const TriangleMesh box = fine_box({0.1f, 0.08f, 0.06f}, 6);
+  TriangleMesh twice = box;
+  const auto offset = static_cast<std::uint32_t>(box.vertices.size());
+  twice.vertices.insert(twice.vertices.end(), box.vertices.begin(), box.vertices.end());
+  for (const auto& t : box.triangles) twice.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  for (float error : {0.0f, 0.002f}) {
+    const TriangleMesh once = simplify_for_drawing(box, error), from_twice = simplify_for_drawing(twice, error);
+    EXPECT_EQ(from_twice.triangles.size(), once.triangles.size()) << "error " << error;
+    EXPECT_EQ(closed_mesh_winding(from_twice), 1) << "error " << error;
+    EXPECT_LT(compare(box, from_twice, kPoses[0]).max_depth_difference, 1e-5f);
+  }
+}
+
 }  // namespace
 }  // namespace viewpose

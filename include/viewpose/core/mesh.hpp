@@ -24,8 +24,8 @@ struct TriangleMesh {
 
 inline BoundingBox bounding_box(const TriangleMesh& mesh) { return bounding_box(mesh.vertices); }
 
-/// Whether the mesh is closed and consistently wound (every edge shared by exactly two triangles
-/// that run along it in opposite directions): +1 with its triangles wound counter-clockwise seen
+/// Whether the mesh is closed and consistently wound (every edge run along by as many triangles in
+/// one direction as in the other: two, or more where the surface is pinched to an edge): +1 with its triangles wound counter-clockwise seen
 /// from outside (positive enclosed volume), -1 wound the other way, 0 not closed. Only a closed
 /// mesh may have its back faces skipped when drawn: they are always hidden by its front faces.
 int closed_mesh_winding(const TriangleMesh& mesh);
