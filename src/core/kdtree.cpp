@@ -58,4 +58,19 @@ bool KdTree::nearest(const Eigen::Vector3f& query, std::uint32_t& index, float& 
   return true;
 }
 
+bool KdTree::nearest_within(const Eigen::Vector3f& query, float bound_squared, std::uint32_t& index,
+                            float& squared_distance) const {
+  if (impl_->points.xyz.empty()) return false;
+  std::uint32_t i = 0;
+  nanoflann::KNNResultSet<float, std::uint32_t> result(1);
+  result.init(&i, &squared_distance);
+  // The search adds a point only when it is closer than the result's worst distance, and skips
+  // branches whose box is farther: starting that distance at the bound instead of infinity.
+  squared_distance = bound_squared;
+  impl_->index->findNeighbors(result, query.data(), nanoflann::SearchParams());
+  if (result.size() == 0) return false;
+  index = impl_->points.original[i];
+  return true;
+}
+
 }  // namespace viewpose

@@ -90,6 +90,40 @@ TEST(NearestGrid, FillingEveryCellAtOnceGivesEachItsExactNearestPoint) {
   EXPECT_EQ(grid.filled(), all) << "queries after fill_all fill nothing new";
 }
 
+TEST(KdTree, NearestWithinABoundFindsTheNearestOrNothing) {
+  // The same point as the unbounded search wherever the nearest lies within the bound, including
+  // on a lattice, whose queries at cell centres have several points equally near; nothing beyond.
+  std::vector<Eigen::Vector3f> pts = sphere_points(2000, 7);
+  for (int x = 0; x < 12; ++x)
+    for (int y = 0; y < 12; ++y) pts.emplace_back(0.2f + 0.01f * static_cast<float>(x), 0.01f * static_cast<float>(y), 0.0f);
+  const KdTree tree(pts);
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<float> q(-0.15f, 0.35f), scale(0.5f, 3.0f);
+  int within = 0, beyond = 0;
+  for (int i = 0; i < 20000; ++i) {
+    Eigen::Vector3f p(q(rng), q(rng), q(rng));
+    if (i % 4 == 0) p = Eigen::Vector3f(0.205f + 0.01f * static_cast<float>(i % 11), 0.005f + 0.01f * static_cast<float>(i % 7), 0.004f);
+    std::uint32_t exact = 0, bounded = 0;
+    float d_exact = 0, d_bounded = 0;
+    ASSERT_TRUE(tree.nearest(p, exact, d_exact));
+    const float bound = d_exact * scale(rng) * scale(rng) * 0.5f;  // below the nearest's distance or above it
+    const bool found = tree.nearest_within(p, bound, bounded, d_bounded);
+    ASSERT_EQ(found, d_exact < bound) << "query " << p.transpose();
+    if (!found) {
+      ++beyond;
+      continue;
+    }
+    ++within;
+    ASSERT_EQ(bounded, exact);
+    ASSERT_EQ(d_bounded, d_exact);
+  }
+  EXPECT_GT(within, 5000);
+  EXPECT_GT(beyond, 2000);
+  std::uint32_t i = 0;
+  float d = 0;
+  EXPECT_FALSE(KdTree(std::vector<Eigen::Vector3f>{}).nearest_within(Eigen::Vector3f::Zero(), 1.0f, i, d));
+}
+
 TEST(NearestGrid, EmptyOrNonFinitePointsFindNothingAndBadSizesThrow) {
   const std::vector<Eigen::Vector3f> none;
   std::uint32_t i = 0;
