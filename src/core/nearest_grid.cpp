@@ -1,6 +1,9 @@
 #include "viewpose/core/nearest_grid.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
 #include <cstdlib>
 #include <limits>
 #include <new>
@@ -61,9 +64,19 @@ std::uint32_t NearestGrid::fill(std::atomic<std::uint32_t>& cell, std::uint32_t 
   // of the tree farther than that (fill_all's rows fill in order, each cell bounded by the last;
   // the YCB-V database's seven grids 500 -> 330 ms). Widened a little, so that no point as near as
   // the nearest is skipped, and the point found is the one the unbounded search finds.
-  const std::uint32_t neighbour = x > 0 ? (&cell - 1)->load(std::memory_order_relaxed) : 0;
-  const float bound = neighbour ? (points_[neighbour - 1] - centre).norm() * 1.001f + 1e-6f : 0.0f;
-  if (!neighbour || !tree_->nearest_within(centre, bound * bound, found, unused)) tree_->nearest(centre, found, unused);
+  // Cells filled as ICP asks for them have their filled neighbours on any side: the nearest of
+  // the six bounds it.
+  const std::ptrdiff_t row = nx_, slice = static_cast<std::ptrdiff_t>(nx_) * ny_;
+  const std::array<std::pair<bool, std::ptrdiff_t>, 6> sides = {
+      {{x > 0, -1}, {x + 1 < nx_, 1}, {y > 0, -row}, {y + 1 < ny_, row}, {z > 0, -slice}, {z + 1 < nz_, slice}}};
+  float bound = std::numeric_limits<float>::infinity();
+  for (const auto& [inside, offset] : sides) {
+    if (!inside) continue;
+    const std::uint32_t held = (&cell + offset)->load(std::memory_order_relaxed);
+    if (held != 0) bound = std::min(bound, (points_[held - 1] - centre).norm() * 1.001f + 1e-6f);
+  }
+  if (!(bound < std::numeric_limits<float>::infinity()) || !tree_->nearest_within(centre, bound * bound, found, unused))
+    tree_->nearest(centre, found, unused);
   cell.store(found + 1, std::memory_order_relaxed);
   return found + 1;
 }
