@@ -13,6 +13,7 @@
 #include "viewpose/database/matching.hpp"
 #include "viewpose/pose/coarse_fit.hpp"
 #include "viewpose/pose/confidence.hpp"
+#include "viewpose/core/threads.hpp"
 #include "viewpose/render/simplify.hpp"
 #include "viewpose/segment/convex_segments.hpp"
 #include "viewpose/segment/voxel_grid.hpp"
@@ -85,13 +86,54 @@ Recognition Recognizer::recognize(const Frame& frame) const {
   out.times.downsample_ms = seg_times.downsample_ms;
   out.times.segment_ms = seg_times.planes_ms + seg_times.clusters_ms;
   out.clusters = seg.clusters.size();
-  for (const Cluster& cluster : seg.clusters) {
-    if (out_of_time(out)) break;
-    recognize_region(cluster_points(seg.points, cluster), frame, out, 0);
+  const std::size_t n = seg.clusters.size();
+  const bool side_by_side = options_.run.parallel_clusters && options_.run.parallel_hypotheses && n > 1 &&
+                            !options_.accept.on_verified && thread_count() > 1;
+  if (!side_by_side) {
+    for (const Cluster& cluster : seg.clusters) {
+      if (out_of_time(out)) break;
+      recognize_region(cluster_points(seg.points, cluster), frame, out, 0);
+    }
+  } else {
+    // Each cluster on its own record, largest first (the longest searches start early), merged in
+    // the clusters' order.
+    std::vector<Recognition> parts(n);
+    std::vector<std::size_t> order(n);
+    for (std::size_t c = 0; c < n; ++c) order[c] = c;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return seg.clusters[a].size() > seg.clusters[b].size(); });
+    const auto count = static_cast<std::ptrdiff_t>(n);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::ptrdiff_t k = 0; k < count; ++k) {
+      const std::size_t c = order[static_cast<std::size_t>(k)];
+      Recognition& part = parts[c];
+      part.started = start;
+      if (out_of_time(part)) continue;
+      recognize_region(cluster_points(seg.points, seg.clusters[c]), frame, part, 0);
+    }
+    for (Recognition& part : parts) merge_part(std::move(part), out);
   }
   if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
   out.times.total_ms = ms_since(start);
   return out;
+}
+
+void Recognizer::merge_part(Recognition&& part, Recognition& out) {
+  for (Detection& d : part.detections) out.detections.push_back(std::move(d));
+  const StageTimes& t = part.times;
+  out.times.normals_ms += t.normals_ms;
+  out.times.vfh_ms += t.vfh_ms;
+  out.times.match_ms += t.match_ms;
+  out.times.crh_ms += t.crh_ms;
+  out.times.icp_ms += t.icp_ms;
+  out.times.verify_ms += t.verify_ms;
+  out.times.split_ms += t.split_ms;
+  out.hypotheses += part.hypotheses;
+  out.repeats += part.repeats;
+  out.screened += part.screened;
+  out.split_clusters += part.split_clusters;
+  out.regions += part.regions;
+  out.dropped_as_explained += part.dropped_as_explained;
+  out.cut_short = out.cut_short || part.cut_short;
 }
 
 void Recognizer::resolve_scene(const Frame& frame, Recognition& out) const {

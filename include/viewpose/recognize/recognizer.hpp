@@ -157,6 +157,13 @@ struct RunOptions {
   /// Refine and verify independent hypotheses (a batch of starting poses, the half turns) on
   /// several threads, taken in order afterwards: the result is the same either way.
   bool parallel_hypotheses = true;
+  /// A frame's clusters are searched side by side, each whole on one thread, largest first (with
+  /// parallel_hypotheses, two or more clusters, and no on_verified: that is heard in order). One
+  /// parallel stage a frame instead of a few a cluster: on a machine busy with other programs, a
+  /// short stage's threads wait for whichever of them the system has put aside, and two threads
+  /// did no better than one. Detections are taken in the clusters' order: the result is the same.
+  /// (Stage times are then summed over the threads; the frame's total is its wall time.)
+  bool parallel_clusters = true;
   /// Starting poses are refined and verified this many at a time (the first that passes in a batch
   /// is taken, as one after the other would). A fixed number, not the thread count, so that results
   /// do not depend on the machine; enough to keep a few cores busy.
@@ -353,6 +360,9 @@ class Recognizer {
   bool out_of_time(Recognition& out) const;
   // Drops the detections whose pixels more confident ones already explain (resolve_scene_claims).
   void resolve_scene(const Frame& frame, Recognition& out) const;
+  // A cluster's own record (RunOptions::parallel_clusters) added to the frame's: its detections
+  // after those before, its counts and stage times summed.
+  static void merge_part(Recognition&& part, Recognition& out);
   // What verification draws of an object.
   VerifyModel verify_model(std::uint32_t object) const;
 
