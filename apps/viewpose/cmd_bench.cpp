@@ -328,6 +328,10 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       fmt::print("{:<12} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f} {:>9.2f}\n", s.name, med, p90, p95, mx, mean);
       jstages[s.name] = {{"median", med}, {"p90", p90}, {"p95", p95}, {"max", mx}, {"mean", mean}};
     }
+    if (thread_count() > 1) {
+      fmt::print("(a frame's clusters run side by side on the threads: each stage's time is summed over them, and the\n"
+                 " stages may add up to more than the frame's total, which is its wall time)\n");
+    }
     const double hyp_med = percentile(hypotheses, 0.5), repeats_med = percentile(repeats, 0.5), per_hyp = percentile(per_hypothesis_ms, 0.5),
                  match_per_region = percentile(match_per_region_ms, 0.5);
     fmt::print("{:.1f} frames per second; {:.0f} hypotheses per frame (median; {:.0f} of them refined onto a pose already "
