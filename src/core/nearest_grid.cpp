@@ -61,11 +61,10 @@ std::uint32_t NearestGrid::fill(std::atomic<std::uint32_t>& cell, std::uint32_t 
   std::uint32_t found = 0;
   float unused = 0;
   // A filled neighbour's point bounds the distance to the nearest: the search skips every branch
-  // of the tree farther than that (fill_all's rows fill in order, each cell bounded by the last;
-  // the YCB-V database's seven grids 500 -> 330 ms). Widened a little, so that no point as near as
-  // the nearest is skipped, and the point found is the one the unbounded search finds.
-  // Cells filled as ICP asks for them have their filled neighbours on any side: the nearest of
-  // the six bounds it.
+  // of the tree farther than that. fill_all's rows fill in order, each cell bounded by the one
+  // before (the YCB-V database's seven grids 500 -> 330 ms); cells filled as ICP asks for them may
+  // have filled neighbours on any side, so the nearest of the six is taken. Widened a little, so
+  // that no point as near as the nearest is skipped: the point found is the unbounded search's.
   const std::ptrdiff_t row = nx_, slice = static_cast<std::ptrdiff_t>(nx_) * ny_;
   const std::array<std::pair<bool, std::ptrdiff_t>, 6> sides = {
       {{x > 0, -1}, {x + 1 < nx_, 1}, {y > 0, -row}, {y + 1 < ny_, row}, {z > 0, -slice}, {z + 1 < nz_, slice}}};

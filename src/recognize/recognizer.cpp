@@ -50,6 +50,15 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
                             db.params.voxel_m * 1000, options_.segment.voxel_m * 1000));
   }
   options_.segment.voxel_m = db.params.voxel_m;
+  // The screen's schedule: the coarse stages, few steps on few points (where a pose leads); judged
+  // by the share brought within the final stage's reach (at the second stage's 2 cm most poses of
+  // the right size bring nearly all of a region: no order).
+  screen_icp_ = options_.icp;
+  if (!screen_icp_.max_correspondence_m.empty()) screen_reach_m_ = screen_icp_.max_correspondence_m.back();
+  if (screen_icp_.max_correspondence_m.size() > 1) screen_icp_.max_correspondence_m.pop_back();
+  screen_icp_.max_iterations_per_stage = options_.match.prescreen_iterations;
+  screen_icp_.max_source_points = options_.match.prescreen_points;
+  screen_icp_.min_fitness_after_first_stage = 0;
 }
 
 Recognizer::~Recognizer() = default;
@@ -119,14 +128,7 @@ Recognition Recognizer::recognize(const Frame& frame) const {
 
 void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   for (Detection& d : part.detections) out.detections.push_back(std::move(d));
-  const StageTimes& t = part.times;
-  out.times.normals_ms += t.normals_ms;
-  out.times.vfh_ms += t.vfh_ms;
-  out.times.match_ms += t.match_ms;
-  out.times.crh_ms += t.crh_ms;
-  out.times.icp_ms += t.icp_ms;
-  out.times.verify_ms += t.verify_ms;
-  out.times.split_ms += t.split_ms;
+  out.times += part.times;  // (a part's segmentation and total are 0: the frame's are its own)
   out.hypotheses += part.hypotheses;
   out.repeats += part.repeats;
   out.screened += part.screened;
@@ -364,15 +366,6 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
   if (from >= region.candidates.size() || region.icp_source.empty() || out_of_time(out)) return;
   const std::size_t n = std::min(m.prescreen, region.candidates.size() - from);
   const auto t = Clock::now();
-  // The schedule's coarse stages, few steps on few points: where the pose leads. Judged by the
-  // share of the region it brings within the final stage's reach (at the second stage's 2 cm most
-  // poses of the right size bring nearly all of it: no order).
-  IcpOptions screen = options_.icp;
-  const float fine_m = screen.max_correspondence_m.empty() ? 0.01f : screen.max_correspondence_m.back();
-  if (screen.max_correspondence_m.size() > 1) screen.max_correspondence_m.pop_back();
-  screen.max_iterations_per_stage = m.prescreen_iterations;
-  screen.max_source_points = m.prescreen_points;
-  screen.min_fitness_after_first_stage = 0;
   const auto first = region.candidates.begin() + static_cast<std::ptrdiff_t>(from);
   for (auto c = first; c != first + static_cast<std::ptrdiff_t>(n); ++c) prepared(c->object);  // (each object once)
   const auto count = static_cast<std::ptrdiff_t>(n);
@@ -382,8 +375,8 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
     const IcpTarget& target = icp_target(c.object);
     // The grid keeps the sizes of its first use: the full schedule's reach, not the screen's.
     if (options_.icp.grid_cell_m > 0) target.grid(options_.icp.grid_cell_m, options_.icp.reach_m());
-    const IcpResult r = icp_point_to_plane(region.icp_source, target, c.T_camera_object.inverse(), screen);
-    c.screen_fitness = icp_fitness(region.icp_source, target, r.T_target_source, fine_m, screen);
+    const IcpResult r = icp_point_to_plane(region.icp_source, target, c.T_camera_object.inverse(), screen_icp_);
+    c.screen_fitness = icp_fitness(region.icp_source, target, r.T_target_source, screen_reach_m_, screen_icp_);
   }
   // Best screened first; equals keep their coarse-fit order. The unscreened rest keep theirs after.
   std::stable_sort(first, first + count, [](const Candidate& a, const Candidate& b) { return a.screen_fitness > b.screen_fitness; });

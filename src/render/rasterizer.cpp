@@ -72,7 +72,7 @@ class TriangleRasterizer {
     // run would cost more to find than it saves.)
     const bool find_runs = u1 - u0 >= 8;
     std::array<double, 3> inv_A{};
-    for (int i = 0; i < 3; ++i) inv_A[i] = A[i] != 0 ? 1.0 / A[i] : 0.0;
+    for (int i = 0; i < 3 && find_runs; ++i) inv_A[i] = A[i] != 0 ? 1.0 / A[i] : 0.0;
     for (int v = v0; v <= v1; ++v) {
       double lo = u0, hi = u1;
       for (int i = 0; i < 3 && find_runs; ++i) {

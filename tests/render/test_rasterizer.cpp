@@ -25,6 +25,26 @@ RenderedFrame render_one(const TriangleMesh& mesh, const Transform& T, bool norm
   return render(std::span(&inst, 1), K, o);
 }
 
+// The same depth at every pixel (NaN where neither drew anything).
+void expect_same_depth(const DepthImage& a, const DepthImage& b) {
+  ASSERT_EQ(a.depth_m.size(), b.depth_m.size());
+  for (std::size_t i = 0; i < a.depth_m.size(); ++i) {
+    const float x = a.depth_m[i], y = b.depth_m[i];
+    ASSERT_TRUE(x == y || (std::isnan(x) && std::isnan(y))) << "pixel " << i << ": " << x << " against " << y;
+  }
+}
+
+// A closed mesh drawn whole and drawn with the back faces of winding +1 skipped: the same picture.
+void expect_fronts_alone_draw_the_same(const TriangleMesh& mesh, const Transform& T) {
+  const RenderedFrame all = render_one(mesh, T);
+  const MeshInstance inst{&mesh, T};
+  RenderOptions culled;
+  culled.closed_winding = 1;
+  const RenderedFrame fronts = render(std::span(&inst, 1), K, culled);
+  ASSERT_GT(all.depth.count_valid(), 1000u);
+  expect_same_depth(all.depth, fronts.depth);
+}
+
 TEST(Rasterizer, PlaneAtKnownDistanceFillsEveryPixelAtThatDepth) {
   const TriangleMesh wall = test::square(10.0f);
   const RenderedFrame f = render_one(wall, at({0, 0, 1.2}), true);
@@ -178,17 +198,11 @@ TEST(Rasterizer, ClosedMeshesDrawnWithoutBackFacesGiveTheSamePicture) {
     SCOPED_TRACE(name);
     const TriangleMesh mesh = make_named_shape(name);
     ASSERT_EQ(closed_mesh_winding(mesh), 1) << "the built-in shapes are closed and wound outwards";
+    expect_fronts_alone_draw_the_same(mesh, T);
     const RenderedFrame all = render_one(mesh, T);
     const MeshInstance inst{&mesh, T};
-    RenderOptions culled;
-    culled.closed_winding = 1;
-    const RenderedFrame fronts = render(std::span(&inst, 1), K, culled);
-    ASSERT_GT(all.depth.count_valid(), 1000u);
-    for (std::size_t i = 0; i < all.depth.depth_m.size(); ++i) {
-      const float a = all.depth.depth_m[i], b = fronts.depth.depth_m[i];
-      ASSERT_TRUE(a == b || (std::isnan(a) && std::isnan(b))) << "pixel " << i;
-    }
     // Wound the other way round, the same faces are the back ones: nothing of the front is drawn.
+    RenderOptions culled;
     culled.closed_winding = -1;
     const RenderedFrame backs = render(std::span(&inst, 1), K, culled);
     std::size_t nearer = 0;
@@ -275,10 +289,7 @@ TEST(Rasterizer, DrawsTheSamePixelsAsTestingEveryPixelOfEachTrianglesBox) {
   const MeshInstance inst{&mesh, identity};
   const RenderedFrame f = render(std::span(&inst, 1), K, o);
   ASSERT_GT(expected.count_valid(), 50000u);
-  for (std::size_t i = 0; i < expected.depth_m.size(); ++i) {
-    const float a = expected.depth_m[i], b = f.depth.depth_m[i];
-    ASSERT_TRUE(a == b || (std::isnan(a) && std::isnan(b))) << "pixel " << i << ": " << a << " against " << b;
-  }
+  expect_same_depth(expected, f.depth);
 }
 
 TEST(Rasterizer, OpenOrInconsistentMeshesAreNotClosed) {
@@ -317,16 +328,7 @@ TEST(Rasterizer, OpenOrInconsistentMeshesAreNotClosed) {
   ASSERT_LT(pinched.vertices.size(), 16u) << "the boxes share the two ends of an edge";
   EXPECT_EQ(closed_mesh_winding(pinched), 1);
   const Transform T = make_transform(Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, -1, 0.5).normalized()).toRotationMatrix(), {0.0, 0.0, 0.7});
-  const RenderedFrame all = render_one(pinched, T);
-  const MeshInstance inst{&pinched, T};
-  RenderOptions culled;
-  culled.closed_winding = 1;
-  const RenderedFrame fronts = render(std::span(&inst, 1), K, culled);
-  ASSERT_GT(all.depth.count_valid(), 1000u);
-  for (std::size_t i = 0; i < all.depth.depth_m.size(); ++i) {
-    const float a = all.depth.depth_m[i], b = fronts.depth.depth_m[i];
-    ASSERT_TRUE(a == b || (std::isnan(a) && std::isnan(b))) << "pixel " << i;
-  }
+  expect_fronts_alone_draw_the_same(pinched, T);
 }
 
 }  // namespace

@@ -220,6 +220,13 @@ struct StageTimes {
   /// Taking a detection's points out of its cluster and clustering the rest again, and splitting
   /// clusters nothing was found in (touching objects).
   double split_ms = 0;
+  /// Each stage's time added (a cluster's record into its frame's: RunOptions::parallel_clusters).
+  StageTimes& operator+=(const StageTimes& o) {
+    downsample_ms += o.downsample_ms, segment_ms += o.segment_ms, normals_ms += o.normals_ms, vfh_ms += o.vfh_ms;
+    match_ms += o.match_ms, crh_ms += o.crh_ms, icp_ms += o.icp_ms, verify_ms += o.verify_ms, total_ms += o.total_ms;
+    split_ms += o.split_ms;
+    return *this;
+  }
 };
 
 struct Recognition {
@@ -369,6 +376,10 @@ class Recognizer {
   std::vector<std::unique_ptr<PreparedObject>> prepared_;  // one per object
   ViewIndex index_;
   double largest_diameter_m_ = 0;
+  // The short ICP's screen (prescreen): the schedule's coarse stages on few points, few steps each;
+  // the share of a region brought within the final stage's reach, screen_reach_m_, ranks a pose.
+  IcpOptions screen_icp_;
+  float screen_reach_m_ = 0.01f;
 };
 
 }  // namespace viewpose
