@@ -18,12 +18,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const viewpose::ViewDatabase db = viewpose::ViewDatabase::deserialize(bytes, "fuzz.vpdb");
     for (const auto& v : db.views) {
-      if (v.object >= db.objects.size() || v.normals.size() != v.points.size()) __builtin_trap();
+      if (v.object >= db.objects.size()) __builtin_trap();
     }
     for (const auto& o : db.objects) {
-      for (const auto& t : o.mesh.triangles)
-        for (std::uint32_t i : t)
-          if (i >= o.mesh.vertices.size()) __builtin_trap();
+      for (const viewpose::TriangleMesh* mesh : {&o.mesh, &o.drawn_mesh})
+        for (const auto& t : mesh->triangles)
+          for (std::uint32_t i : t)
+            if (i >= mesh->vertices.size()) __builtin_trap();
+      for (std::uint32_t c : o.nearest_cells)
+        if (c > o.model_points.size()) __builtin_trap();
     }
     const viewpose::ViewDatabase again = viewpose::ViewDatabase::deserialize(db.serialize(), "again");
     if (again.views.size() != db.views.size() || again.objects.size() != db.objects.size()) __builtin_trap();

@@ -103,6 +103,7 @@ def vpdb_payload(objects, views):
 
     params = {"camera": {"fx": 525.0, "fy": 525.0, "cx": 319.5, "cy": 239.5, "width": 640, "height": 480},
               "subdivisions": 1, "distance_m": 1.0, "voxel_m": 0.003, "icp_voxel_m": 0.005, "normal_radius_m": 0.015,
+              "drawn_mesh_error_m": 0.002, "grid_cell_m": 0.003, "grid_margin_m": 0.04,
               "vfh": {"normalize_bins": True, "normalize_distances": False, "size_component": True, "pcl_compatible": True}}
     out = s(json.dumps(params, separators=(",", ":"))) + struct.pack("<I", len(objects))
     for oid, name, verts, tris, model in objects:
@@ -111,19 +112,21 @@ def vpdb_payload(objects, views):
         out += pts(model) + pts([(0.0, 0.0, 1.0)] * len(model))
         out += struct.pack("<I", 1) + struct.pack("<12d", -1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1, 0)  # a half turn about z
         out += struct.pack("<I", 1) + struct.pack("<6d", 0, 0, 0, 0, 1, 0)  # axis z through the origin (interleaved)
+        out += pts(verts) + struct.pack("<I", len(tris)) + b"".join(struct.pack("<3I", *t) for t in tris)  # drawing mesh
+        out += struct.pack("<Q", 0)  # no stored grid: the recognizer fills its own
     out += struct.pack("<I", len(views))
     for obj, view_points in views:
         out += struct.pack("<I", obj) + struct.pack("<12d", 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0.5)
         out += struct.pack("<308f", *[(i % 45) / 45.0 for i in range(308)])
         out += struct.pack("<90f", *[1.0 / (1 + i) for i in range(90)])
         out += struct.pack("<3f", 0.0, 0.0, 0.5)
-        out += pts(view_points) + pts([(0.0, 0.0, -1.0)] * len(view_points)) + pts(view_points[:2])
+        out += struct.pack("<I", len(view_points)) + pts(view_points[:2])
     return out
 
 
 square = [(0.0, 0.0, 0.0), (0.1, 0.0, 0.0), (0.1, 0.1, 0.0), (0.0, 0.1, 0.0)]
 payload = vpdb_payload([(1, "square", square, [(0, 1, 2), (0, 2, 3)], square)], [(0, square), (0, square[:3])])
 write("view_database", "square_payload", b"\x00" + payload)
-header = (b"VPDB\r\n\x1a\n" + struct.pack("<IIQI", 2, 0x01020304, len(payload), zlib.crc32(payload)) + b"\x00" * 4)
+header = (b"VPDB\r\n\x1a\n" + struct.pack("<IIQI", 3, 0x01020304, len(payload), zlib.crc32(payload)) + b"\x00" * 4)
 write("view_database", "square_file", b"\x01" + header + payload)
 write("view_database", "empty_payload", b"\x00" + vpdb_payload([], []))

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <utility>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <new>
 
@@ -16,8 +17,7 @@ namespace viewpose {
 
 void NearestGrid::FreeDeleter::operator()(void* p) const { std::free(p); }
 
-NearestGrid::NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> points, float cell_m, float margin_m)
-    : tree_(&tree), points_(points) {
+NearestGrid::Extent NearestGrid::extent(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m) {
   if (!(cell_m > 0) || !(margin_m >= 0)) throw Error(fmt::format("nearest grid: cell {} and margin {} must be positive", cell_m, margin_m));
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
   for (const Eigen::Vector3f& p : points) {
@@ -25,21 +25,48 @@ NearestGrid::NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> po
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
-  if (!(lo.x() <= hi.x()) || tree.size() == 0) return;  // no finite point: every query finds nothing
-  origin_ = lo - Eigen::Vector3f::Constant(margin_m);
-  cell_ = cell_m;
-  inv_cell_ = 1.0f / cell_m;
-  const Eigen::Vector3f size = (hi - lo + Eigen::Vector3f::Constant(2 * margin_m)) * inv_cell_;
+  Extent e;
+  if (!(lo.x() <= hi.x())) return e;  // no finite point: every query finds nothing
+  e.origin = lo - Eigen::Vector3f::Constant(margin_m);
+  const Eigen::Vector3f size = (hi - lo + Eigen::Vector3f::Constant(2 * margin_m)) * (1.0f / cell_m);
   const double cells = (std::floor(size.x()) + 1.0) * (std::floor(size.y()) + 1.0) * (std::floor(size.z()) + 1.0);
   if (cells > 2e8) throw Error(fmt::format("nearest grid: {:.0f} cells of {} m is too many; use larger cells", cells, cell_m));
-  nx_ = static_cast<std::uint32_t>(size.x()) + 1;
-  ny_ = static_cast<std::uint32_t>(size.y()) + 1;
-  nz_ = static_cast<std::uint32_t>(size.z()) + 1;
+  e.nx = static_cast<std::uint32_t>(size.x()) + 1;
+  e.ny = static_cast<std::uint32_t>(size.y()) + 1;
+  e.nz = static_cast<std::uint32_t>(size.z()) + 1;
+  return e;
+}
+
+std::size_t NearestGrid::cell_count(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m) {
+  return extent(points, cell_m, margin_m).cells();
+}
+
+NearestGrid::NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> points, float cell_m, float margin_m)
+    : tree_(&tree), points_(points) {
+  const Extent e = extent(points, cell_m, margin_m);
+  if (e.cells() == 0 || tree.size() == 0) return;  // every query finds nothing
+  origin_ = e.origin;
+  cell_ = cell_m;
+  inv_cell_ = 1.0f / cell_m;
+  nx_ = e.nx;
+  ny_ = e.ny;
+  nz_ = e.nz;
   // calloc: zero pages on demand. std::atomic<uint32_t> of all-zero bytes is the value 0.
   static_assert(std::atomic<std::uint32_t>::is_always_lock_free && sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t));
-  void* memory = std::calloc(static_cast<std::size_t>(cells), sizeof(std::atomic<std::uint32_t>));
+  void* memory = std::calloc(e.cells(), sizeof(std::atomic<std::uint32_t>));
   if (!memory) throw std::bad_alloc();
   cells_.reset(static_cast<std::atomic<std::uint32_t>*>(memory));
+}
+
+NearestGrid::NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> points, float cell_m, float margin_m,
+                         std::span<const std::uint32_t> cells)
+    : NearestGrid(tree, points, cell_m, margin_m) {
+  const std::size_t n = static_cast<std::size_t>(nx_) * ny_ * nz_;
+  if (cells.size() != n) throw Error(fmt::format("nearest grid: {} cells given for a grid of {}", cells.size(), n));
+  std::uint32_t largest = 0;
+  for (std::uint32_t c : cells) largest = std::max(largest, c);
+  if (largest > points.size()) throw Error(fmt::format("nearest grid: a cell holds point {} of {}", largest - 1, points.size()));
+  if (n > 0) std::memcpy(static_cast<void*>(cells_.get()), cells.data(), n * sizeof(std::uint32_t));
 }
 
 void NearestGrid::fill_all() const {
@@ -78,6 +105,12 @@ std::uint32_t NearestGrid::fill(std::atomic<std::uint32_t>& cell, std::uint32_t 
     tree_->nearest(centre, found, unused);
   cell.store(found + 1, std::memory_order_relaxed);
   return found + 1;
+}
+
+std::vector<std::uint32_t> NearestGrid::cells() const {
+  std::vector<std::uint32_t> out(static_cast<std::size_t>(nx_) * ny_ * nz_);
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = cells_[i].load(std::memory_order_relaxed);
+  return out;
 }
 
 std::size_t NearestGrid::filled() const {

@@ -72,7 +72,10 @@ ViewIndex::ViewIndex(const ViewDatabase& db, std::size_t candidates) : db_(&db),
   const std::size_t n = db.views.size();
   objects_.reserve(n);
   for (const ViewEntry& v : db.views) objects_.push_back(v.object);
-  if (n <= candidates_) return;  // small: exhaustive and exact
+  // Small: exhaustive and exact. Up to twice `candidates` views a full search costs little more
+  // than the index's own pass and its candidates (640 views: 0.19 against 0.13 ms a query), and
+  // the principal directions are not found at start-up (13-27 ms).
+  if (n <= 2 * candidates_) return;
   constexpr Eigen::Index kBins = std::tuple_size_v<Vfh>;
   const auto root = [](const Vfh& h) {
     Eigen::Matrix<float, kBins, 1> r;

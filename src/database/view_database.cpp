@@ -11,7 +11,10 @@
 
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/file.hpp"
+#include "viewpose/core/kdtree.hpp"
+#include "viewpose/core/nearest_grid.hpp"
 #include "viewpose/render/rasterizer.hpp"
+#include "viewpose/render/simplify.hpp"
 #include "viewpose/render/view_sphere.hpp"
 #include "viewpose/segment/voxel_grid.hpp"
 
@@ -44,6 +47,17 @@ class Writer {
     put(static_cast<std::uint32_t>(pts.size()));
     for (const auto& p : pts) put_floats(p.data(), 3);
   }
+  void put_mesh(const TriangleMesh& mesh) {
+    put_points(mesh.vertices);
+    put(static_cast<std::uint32_t>(mesh.triangles.size()));
+    for (const auto& t : mesh.triangles)
+      for (std::uint32_t i : t) put(i);
+  }
+  void put_cells(const std::vector<std::uint32_t>& cells) {
+    put(static_cast<std::uint64_t>(cells.size()));
+    const auto* p = reinterpret_cast<const std::uint8_t*>(cells.data());
+    bytes.insert(bytes.end(), p, p + cells.size() * sizeof(std::uint32_t));
+  }
   std::vector<std::uint8_t> bytes;
 };
 
@@ -60,7 +74,7 @@ class Reader {
   }
   void get_floats(float* out, std::size_t n) {
     need(n * sizeof(float));
-    std::memcpy(out, bytes_.data() + pos_, n * sizeof(float));
+    if (n > 0) std::memcpy(out, bytes_.data() + pos_, n * sizeof(float));
     pos_ += n * sizeof(float);
   }
   std::string get_string() {
@@ -74,11 +88,33 @@ class Reader {
     const auto n = get<std::uint32_t>();
     need(std::size_t{n} * 12);  // before allocating
     std::vector<Eigen::Vector3f> pts(n);
-    for (auto& p : pts) {
-      get_floats(p.data(), 3);
-      if (!p.allFinite()) fail("a point or normal is not a finite number");
-    }
+    static_assert(sizeof(Eigen::Vector3f) == 12);
+    get_floats(pts.empty() ? nullptr : pts.front().data(), 3 * std::size_t{n});
+    bool finite = true;  // one pass without a branch per value: the loop vectorizes
+    for (const Eigen::Vector3f& p : pts) finite &= std::isfinite(p.x()) & std::isfinite(p.y()) & std::isfinite(p.z());
+    if (!finite) fail("a point or normal is not a finite number");
     return pts;
+  }
+  TriangleMesh get_mesh() {
+    TriangleMesh mesh;
+    mesh.vertices = get_points();
+    const auto n_triangles = get<std::uint32_t>();
+    need_records(n_triangles, 12);
+    mesh.triangles.resize(n_triangles);
+    std::uint32_t largest = 0;
+    for (auto& t : mesh.triangles) {
+      for (auto& vertex : t) largest = std::max(largest, vertex = get<std::uint32_t>());
+    }
+    if (!mesh.triangles.empty() && largest >= mesh.vertices.size()) fail("a triangle names a vertex that does not exist");
+    return mesh;
+  }
+  std::vector<std::uint32_t> get_cells() {
+    const auto n = get<std::uint64_t>();
+    need_records(n, sizeof(std::uint32_t));
+    std::vector<std::uint32_t> cells(static_cast<std::size_t>(n));
+    if (n > 0) std::memcpy(cells.data(), bytes_.data() + pos_, cells.size() * sizeof(std::uint32_t));
+    pos_ += cells.size() * sizeof(std::uint32_t);
+    return cells;
   }
   /// Fails unless `count` records of at least `min_bytes` each can still follow.
   void need_records(std::size_t count, std::size_t min_bytes) const {
@@ -104,6 +140,9 @@ nlohmann::json params_json(const DatabaseParams& p) {
           {"voxel_m", p.voxel_m},
           {"icp_voxel_m", p.icp_voxel_m},
           {"normal_radius_m", p.describe.normals.radius_m},
+          {"drawn_mesh_error_m", p.drawn_mesh_error_m},
+          {"grid_cell_m", p.grid_cell_m},
+          {"grid_margin_m", p.grid_margin_m},
           {"vfh", {{"normalize_bins", p.describe.vfh.normalize_bins},
                    {"normalize_distances", p.describe.vfh.normalize_distances},
                    {"size_component", p.describe.vfh.size_component},
@@ -134,6 +173,9 @@ DatabaseParams params_from_json(const std::string& text, const Reader& r) {
     p.voxel_m = length(j.at("voxel_m"));
     p.icp_voxel_m = length(j.at("icp_voxel_m"));
     p.describe.normals.radius_m = length(j.at("normal_radius_m"));
+    p.drawn_mesh_error_m = length(j.at("drawn_mesh_error_m"));
+    p.grid_cell_m = length(j.at("grid_cell_m"));
+    p.grid_margin_m = length(j.at("grid_margin_m"));
     const auto& v = j.at("vfh");
     p.describe.vfh.normalize_bins = v.at("normalize_bins").get<bool>();
     p.describe.vfh.normalize_distances = v.at("normalize_distances").get<bool>();
@@ -163,11 +205,7 @@ std::vector<std::uint8_t> ViewDatabase::serialize() const {
     w.put(static_cast<std::int32_t>(o.id));
     w.put_string(o.name);
     w.put(o.diameter_m);
-    w.put_points(o.mesh.vertices);
-    w.put(static_cast<std::uint32_t>(o.mesh.triangles.size()));
-    for (const auto& t : o.mesh.triangles) {
-      for (std::uint32_t i : t) w.put(i);
-    }
+    w.put_mesh(o.mesh);
     w.put_points(o.model_points);
     w.put_points(o.model_normals);
     w.put(static_cast<std::uint32_t>(o.symmetries.discrete.size()));
@@ -180,6 +218,8 @@ std::vector<std::uint8_t> ViewDatabase::serialize() const {
         w.put(c.axis[k]);
         w.put(c.offset_m[k]);
       }
+    w.put_mesh(o.drawn_mesh);
+    w.put_cells(o.nearest_cells);
   }
   w.put(static_cast<std::uint32_t>(views.size()));
   for (const auto& v : views) {
@@ -189,8 +229,7 @@ std::vector<std::uint8_t> ViewDatabase::serialize() const {
     w.put_floats(v.vfh.data(), v.vfh.size());
     w.put_floats(v.crh.data(), v.crh.size());
     w.put_floats(v.centroid.data(), 3);
-    w.put_points(v.points);
-    w.put_points(v.normals);
+    w.put(v.described_points);
     w.put_points(v.icp_points);
   }
   return file_from_payload(w.bytes);
@@ -250,16 +289,7 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
     o.name = r.get_string();
     o.diameter_m = r.get<double>();
     if (!(std::isfinite(o.diameter_m) && o.diameter_m > 0 && o.diameter_m < 1e3)) r.fail("an object's diameter is out of range");
-    o.mesh.vertices = r.get_points();
-    const auto n_triangles = r.get<std::uint32_t>();
-    r.need_records(n_triangles, 12);
-    o.mesh.triangles.resize(n_triangles);
-    for (auto& t : o.mesh.triangles) {
-      for (auto& vertex : t) {
-        vertex = r.get<std::uint32_t>();
-        if (vertex >= o.mesh.vertices.size()) r.fail("a triangle names a vertex that does not exist");
-      }
-    }
+    o.mesh = r.get_mesh();
     o.model_points = r.get_points();
     o.model_normals = r.get_points();
     if (o.model_normals.size() != o.model_points.size()) r.fail("an object's model normals do not match its points");
@@ -287,10 +317,21 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
       }
       o.symmetries.continuous.push_back(c);
     }
+    o.drawn_mesh = r.get_mesh();
+    o.nearest_cells = r.get_cells();
+    if (!o.nearest_cells.empty()) {
+      // As NearestGrid would refuse them, but here, so that a damaged file is refused when it is read.
+      std::uint32_t largest = 0;
+      for (std::uint32_t c : o.nearest_cells) largest = std::max(largest, c);
+      if (o.nearest_cells.size() != NearestGrid::cell_count(o.model_points, db.params.grid_cell_m, db.params.grid_margin_m) ||
+          largest > o.model_points.size()) {
+        r.fail("an object's nearest-point grid does not fit its model points");
+      }
+    }
     db.objects.push_back(std::move(o));
   }
   const auto n_views = r.get<std::uint32_t>();
-  r.need_records(n_views, 4 + 96 + 4 * (308 + 90 + 3) + 12);
+  r.need_records(n_views, 4 + 96 + 4 * (308 + 90 + 3) + 4 + 4);
   db.views.resize(n_views);
   for (auto& v : db.views) {
     v.object = r.get<std::uint32_t>();
@@ -308,10 +349,8 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
       return std::all_of(values.begin(), values.end(), [](float x) { return std::isfinite(x); });
     };
     if (!finite(v.vfh) || !finite(v.crh) || !v.centroid.allFinite()) r.fail("a view's descriptor is not finite");
-    v.points = r.get_points();
-    v.normals = r.get_points();
+    v.described_points = r.get<std::uint32_t>();
     v.icp_points = r.get_points();
-    if (v.normals.size() != v.points.size()) r.fail("a view's normals do not match its points");
   }
   if (!r.at_end()) r.fail("unexpected data after the last view");
   return db;
@@ -347,8 +386,7 @@ int add_captured_view(ViewDatabase& db, const PointCloud& cloud, const std::stri
   v.crh = d.crh;
   v.centroid = d.centroid;
   v.icp_points = voxel_downsample(d.cloud, db.params.icp_voxel_m).points;
-  v.points = d.cloud.points;
-  v.normals = d.cloud.normals;
+  v.described_points = static_cast<std::uint32_t>(d.cloud.points.size());
   db.views.push_back(std::move(v));
   // The model cloud grows with every view; the diameter follows it.
   PointCloud model;
@@ -363,6 +401,7 @@ int add_captured_view(ViewDatabase& db, const PointCloud& cloud, const std::stri
   TriangleMesh hull;
   hull.vertices = object.model_points;
   object.diameter_m = mesh_diameter(hull);
+  object.nearest_cells.clear();  // of the model points before this view: the recognizer fills its own
   return object.id;
 }
 
@@ -371,7 +410,7 @@ PointCloud view_points(const DepthImage& depth, const CameraIntrinsics& K, float
 }
 
 ViewEntry describe_view(const DepthImage& depth, const Transform& T_view_object, std::uint32_t object,
-                        const DatabaseParams& params) {
+                        const DatabaseParams& params, PointCloud* described) {
   Description d = describe(view_points(depth, params.camera, params.voxel_m), params.describe);
   ViewEntry v;
   v.object = object;
@@ -380,8 +419,8 @@ ViewEntry describe_view(const DepthImage& depth, const Transform& T_view_object,
   v.crh = d.crh;
   v.centroid = d.centroid;
   v.icp_points = voxel_downsample(d.cloud, params.icp_voxel_m).points;
-  v.points = std::move(d.cloud.points);
-  v.normals = std::move(d.cloud.normals);
+  v.described_points = static_cast<std::uint32_t>(d.cloud.points.size());
+  if (described) *described = std::move(d.cloud);
   return v;
 }
 
@@ -411,11 +450,24 @@ void check_viewable(const std::string& name, const BoundingBox& box, const Datab
 
 }  // namespace
 
+void prepare_object(DatabaseObject& object, const DatabaseParams& params, std::size_t& grid_bytes_left) {
+  object.drawn_mesh = object.mesh.triangles.empty() ? TriangleMesh{} : simplify_for_drawing(object.mesh, params.drawn_mesh_error_m);
+  object.nearest_cells.clear();
+  const std::size_t bytes = NearestGrid::cell_count(object.model_points, params.grid_cell_m, params.grid_margin_m) * sizeof(std::uint32_t);
+  if (bytes == 0 || bytes > grid_bytes_left) return;
+  grid_bytes_left -= bytes;
+  const KdTree tree(object.model_points);
+  const NearestGrid grid(tree, object.model_points, params.grid_cell_m, params.grid_margin_m);
+  grid.fill_all();
+  object.nearest_cells = grid.cells();
+}
+
 ViewDatabase build_view_database(std::span<const ObjectModel> objects, const DatabaseParams& params,
                                  const std::function<void(std::size_t, std::size_t)>& progress) {
   params.camera.validate();
   ViewDatabase db;
   db.params = params;
+  std::size_t grid_bytes_left = params.max_grid_bytes;
   for (std::size_t o = 0; o < objects.size(); ++o) {
     const TriangleMesh& mesh = objects[o].mesh;
     if (mesh.triangles.empty()) throw Error(fmt::format("db build: object '{}' has no triangles", objects[o].name));
@@ -435,29 +487,31 @@ ViewDatabase build_view_database(std::span<const ObjectModel> objects, const Dat
     render_options.closed_winding = closed_mesh_winding(mesh);  // the same pictures, sooner
     const std::vector<RenderedFrame> frames = render_views(mesh, poses, params.camera, render_options);
     std::vector<ViewEntry> entries(poses.size());
+    std::vector<PointCloud> described(poses.size());
 #pragma omp parallel for schedule(dynamic)
     for (std::size_t i = 0; i < poses.size(); ++i) {
-      entries[i] = describe_view(frames[i].depth, poses[i], static_cast<std::uint32_t>(o), params);
+      entries[i] = describe_view(frames[i].depth, poses[i], static_cast<std::uint32_t>(o), params, &described[i]);
     }
     // The model cloud: every view's points carried into the object frame, on one voxel grid. It is
     // the surface a sensor can see, with outward normals, and ICP aligns scene points to it.
     PointCloud model;
-    for (const ViewEntry& e : entries) {
-      const Transform T_object_view = e.T_view_object.inverse();
+    for (std::size_t v = 0; v < entries.size(); ++v) {
+      const Transform T_object_view = entries[v].T_view_object.inverse();
       const Eigen::Matrix3f R = T_object_view.linear().cast<float>();
       const Eigen::Vector3f t = T_object_view.translation().cast<float>();
-      for (std::size_t i = 0; i < e.points.size(); ++i) {
-        model.points.push_back(R * e.points[i] + t);
-        model.normals.push_back(R * e.normals[i]);
+      for (std::size_t i = 0; i < described[v].points.size(); ++i) {
+        model.points.push_back(R * described[v].points[i] + t);
+        model.normals.push_back(R * described[v].normals[i]);
       }
     }
     model.width = static_cast<int>(model.points.size());
     PointCloud model_grid = voxel_downsample(model, params.voxel_m);
     db.objects.back().model_points = std::move(model_grid.points);
     db.objects.back().model_normals = std::move(model_grid.normals);
+    prepare_object(db.objects.back(), params, grid_bytes_left);
     std::size_t usable = 0;
     for (auto& e : entries) {
-      if (e.points.size() < 3) continue;  // a view that sees nothing is no use
+      if (e.described_points < 3) continue;  // a view that sees nothing is no use
       db.views.push_back(std::move(e));
       ++usable;
     }

@@ -18,8 +18,11 @@ IcpTarget::IcpTarget(std::vector<Eigen::Vector3f> p, std::vector<Eigen::Vector3f
   }
 }
 
-const NearestGrid& IcpTarget::grid(float cell_m, float margin_m) const {
-  std::call_once(grid_once_, [&] { grid_ = std::make_unique<NearestGrid>(tree, points, cell_m, margin_m); });
+const NearestGrid& IcpTarget::grid(float cell_m, float margin_m, std::span<const std::uint32_t> cells) const {
+  std::call_once(grid_once_, [&] {
+    grid_ = cells.empty() ? std::make_unique<NearestGrid>(tree, points, cell_m, margin_m)
+                          : std::make_unique<NearestGrid>(tree, points, cell_m, margin_m, cells);
+  });
   return *grid_;
 }
 

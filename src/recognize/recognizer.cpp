@@ -67,9 +67,19 @@ const Recognizer::PreparedObject& Recognizer::prepared(std::uint32_t object) con
   PreparedObject& p = *prepared_[object];
   std::call_once(p.once, [&] {
     const DatabaseObject& o = db_.objects[object];
+    const DatabaseParams& made = db_.params;  // what the database's prepared data was made with
     p.target = std::make_unique<IcpTarget>(o.model_points, o.model_normals);
+    const float cell_m = options_.icp.grid_cell_m, reach_m = options_.icp.reach_m();
+    if (!o.nearest_cells.empty() && cell_m == made.grid_cell_m && reach_m == made.grid_margin_m) {
+      p.target->grid(cell_m, reach_m, o.nearest_cells);
+    }
     p.occupancy = OccupancyGrid(o.model_points, options_.match.fit_cell_m);
-    p.drawn = options_.verify_mesh_error_m > 0 ? simplify_for_drawing(o.mesh, options_.verify_mesh_error_m) : o.mesh;
+    const float error_m = options_.verify_mesh_error_m;
+    if (error_m > 0 && error_m == made.drawn_mesh_error_m && !o.drawn_mesh.triangles.empty()) {
+      p.drawn = o.drawn_mesh;
+    } else {
+      p.drawn = error_m > 0 ? simplify_for_drawing(o.mesh, error_m) : o.mesh;
+    }
     p.closed_winding = closed_mesh_winding(p.drawn);
   });
   return p;

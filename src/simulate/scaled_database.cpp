@@ -17,7 +17,10 @@ ViewDatabase scaled_database(const ViewDatabase& db, std::size_t objects, std::u
     const std::size_t source = o % db.objects.size();
     DatabaseObject object = db.objects[source];
     object.id = static_cast<int>(o + 1);
-    if (o >= db.objects.size()) object.name = fmt::format("{}_{}", object.name, o / db.objects.size());
+    if (o >= db.objects.size()) {
+      object.name = fmt::format("{}_{}", object.name, o / db.objects.size());
+      object.nearest_cells.clear();  // as a database of this many objects would not store them all
+    }
     out.objects.push_back(std::move(object));
     for (const ViewEntry& v : db.views) {
       if (v.object != source) continue;

@@ -90,6 +90,43 @@ TEST(NearestGrid, FillingEveryCellAtOnceGivesEachItsExactNearestPoint) {
   EXPECT_EQ(grid.filled(), all) << "queries after fill_all fill nothing new";
 }
 
+TEST(NearestGrid, AGridMadeFromAnothersCellsAnswersAsItDoesAndRefusesCellsThatDoNotFit) {
+  // What a view database stores (a filled grid's cells) and the recognizer makes its grid from.
+  const std::vector<Eigen::Vector3f> pts = sphere_points(2000, 9);
+  const float cell = 0.004f, margin = 0.02f;
+  const KdTree tree(pts);
+  const NearestGrid filled(tree, pts, cell, margin);
+  filled.fill_all();
+  const std::vector<std::uint32_t> cells = filled.cells();
+  ASSERT_EQ(cells.size(), NearestGrid::cell_count(pts, cell, margin));
+  ASSERT_EQ(filled.filled(), cells.size());
+  const NearestGrid given(tree, pts, cell, margin, cells);
+  EXPECT_EQ(given.filled(), cells.size()) << "nothing left to search for";
+  EXPECT_EQ(given.cells(), cells);
+  const NearestGrid lazy(tree, pts, cell, margin);
+  std::mt19937_64 rng(10);
+  std::uniform_real_distribution<float> u(-0.13f, 0.13f);
+  for (int q = 0; q < 5000; ++q) {
+    const Eigen::Vector3f p(u(rng), u(rng), u(rng));
+    std::uint32_t a = 0, b = 0;
+    float da = 0, db = 0;
+    const bool inside = lazy.nearest(p, a, da);
+    ASSERT_EQ(given.nearest(p, b, db), inside);
+    if (inside) {
+      ASSERT_EQ(a, b) << "query " << p.transpose();
+    }
+  }
+  // Unfilled cells (0) are allowed and fill as queries ask; a wrong count or a point past the end is not.
+  std::vector<std::uint32_t> partly = cells;
+  std::fill(partly.begin(), partly.begin() + static_cast<std::ptrdiff_t>(partly.size() / 2), 0u);
+  EXPECT_EQ(NearestGrid(tree, pts, cell, margin, partly).filled(), cells.size() - cells.size() / 2);
+  test::expect_error([&] { NearestGrid(tree, pts, cell, margin, std::span(cells).subspan(1)); }, "cells given for a grid of");
+  std::vector<std::uint32_t> past = cells;
+  past[past.size() / 3] = static_cast<std::uint32_t>(pts.size() + 1);
+  test::expect_error([&] { NearestGrid(tree, pts, cell, margin, past); }, "a cell holds point");
+  test::expect_error([&] { NearestGrid(tree, pts, cell * 2, margin, cells); }, "cells given for a grid of");
+}
+
 TEST(KdTree, NearestWithinABoundFindsTheNearestOrNothing) {
   // The same point as the unbounded search wherever the nearest lies within the bound, including
   // on a lattice, whose queries at cell centres have several points equally near; nothing beyond.

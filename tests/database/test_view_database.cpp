@@ -7,7 +7,10 @@
 #include "viewpose/database/matching.hpp"
 #include "viewpose/database/view_database.hpp"
 #include "viewpose/core/file.hpp"
+#include "viewpose/core/kdtree.hpp"
+#include "viewpose/core/nearest_grid.hpp"
 #include "viewpose/render/rasterizer.hpp"
+#include "viewpose/render/simplify.hpp"
 #include "viewpose/render/shapes.hpp"
 #include "viewpose/simulate/scaled_database.hpp"
 
@@ -34,9 +37,8 @@ TEST(ViewDatabaseTest, HoldsEveryViewOfEveryObjectWithItsPose) {
   EXPECT_NEAR(db.objects[0].diameter_m, mesh_diameter(make_jug()), 1e-9);
   ASSERT_EQ(db.views.size(), 40u);
   for (const ViewEntry& v : db.views) {
-    EXPECT_GT(v.points.size(), 300u);
-    EXPECT_EQ(v.normals.size(), v.points.size());
-    EXPECT_LT(v.icp_points.size(), v.points.size());  // the 5 mm copy is coarser
+    EXPECT_GT(v.described_points, 300u);
+    EXPECT_LT(v.icp_points.size(), v.described_points);  // the 5 mm copy is coarser
     EXPECT_NEAR(v.T_view_object.translation().norm(), 1.0, 0.02);  // 1 m from the object's centre
     float sum = 0;
     for (float b : v.vfh) sum += b;
@@ -104,6 +106,36 @@ TEST(ViewDatabaseTest, SurvivesAWriteReadRoundTripBitForBit) {
   EXPECT_TRUE(back.objects[1].symmetries.discrete[0].isApprox(db.objects[1].symmetries.discrete[0], 0.0));
   EXPECT_EQ(back.params.subdivisions, 0);
   EXPECT_EQ(back.params.describe.vfh.pcl_compatible, db.params.describe.vfh.pcl_compatible);
+  // What recognition would prepare is stored: a drawing mesh far smaller than the mesh, and a
+  // filled nearest-point grid, as the recognizer would make them.
+  for (std::size_t o = 0; o < db.objects.size(); ++o) {
+    const DatabaseObject& object = back.objects[o];
+    EXPECT_GT(object.drawn_mesh.triangles.size(), 8u);
+    EXPECT_LT(object.drawn_mesh.triangles.size(), object.mesh.triangles.size() / 2);
+    EXPECT_EQ(object.drawn_mesh.triangles, simplify_for_drawing(object.mesh, db.params.drawn_mesh_error_m).triangles);
+    ASSERT_EQ(object.nearest_cells.size(), NearestGrid::cell_count(object.model_points, db.params.grid_cell_m, db.params.grid_margin_m));
+    const KdTree tree(object.model_points);
+    const NearestGrid grid(tree, object.model_points, db.params.grid_cell_m, db.params.grid_margin_m);
+    grid.fill_all();
+    EXPECT_EQ(object.nearest_cells, grid.cells());
+  }
+}
+
+TEST(ViewDatabaseTest, GridsAreStoredWithinTheirByteLimitAndNotForChangedModelPoints) {
+  const std::vector<ObjectModel> models = {{1, "jug", make_jug()}, {5, "can", make_can()}};
+  DatabaseParams p;
+  p.subdivisions = 0;
+  p.max_grid_bytes = small_db().objects[0].nearest_cells.size() * sizeof(std::uint32_t);  // the first object's alone
+  const ViewDatabase db = build_view_database(models, p);
+  EXPECT_FALSE(db.objects[0].nearest_cells.empty());
+  EXPECT_TRUE(db.objects[1].nearest_cells.empty()) << "over the limit: the recognizer fills it";
+  EXPECT_FALSE(db.objects[1].drawn_mesh.triangles.empty()) << "drawing meshes are small: always stored";
+  // A damaged grid (a cell past the model's points) is refused when the file is read.
+  ViewDatabase bad = small_db();
+  bad.objects[1].nearest_cells[5] = static_cast<std::uint32_t>(bad.objects[1].model_points.size() + 1);
+  expect_error([&] { ViewDatabase::deserialize(bad.serialize(), "grid.vpdb"); }, "grid.vpdb: an object's nearest-point grid does not fit");
+  bad.objects[1].nearest_cells.pop_back();
+  expect_error([&] { ViewDatabase::deserialize(bad.serialize(), "grid.vpdb"); }, "does not fit its model points");
 }
 
 TEST(ViewDatabaseTest, DamagedOrForeignFilesAreRefusedWithAClearError) {
@@ -116,8 +148,8 @@ TEST(ViewDatabaseTest, DamagedOrForeignFilesAreRefusedWithAClearError) {
   expect_error([&] { ViewDatabase::deserialize({}, "empty.vpdb"); }, "empty.vpdb: not a viewpose view database");
   expect_error([&] { ViewDatabase::deserialize(test::to_bytes("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\n"), "a.vpdb"); },
                "not a viewpose view database");
-  expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { b[8] = 1; }), "v1.vpdb"); },
-               "database format version 1, this viewpose reads version 2; rebuild it");
+  expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { b[8] = 2; }), "v2.vpdb"); },
+               "database format version 2, this viewpose reads version 3; rebuild it");
   expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { std::swap(b[12], b[15]); }), "be.vpdb"); }, "byte order");
   expect_error([&] { ViewDatabase::deserialize(std::span(good.data(), good.size() / 2), "half.vpdb"); }, "truncated or padded");
   expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { b[b.size() / 2] ^= 0x40; }), "flip.vpdb"); },
@@ -138,7 +170,8 @@ TEST(ViewDatabaseTest, TheFuzzersSeedFileIsADatabaseAndItsDamagedValuesAreRefuse
   EXPECT_EQ(db.objects[0].name, "square");
   EXPECT_EQ(db.objects[0].symmetries.discrete.size(), 1u);
   EXPECT_EQ(db.views.size(), 2u);
-  EXPECT_EQ(db.views[1].points.size(), 3u);
+  EXPECT_EQ(db.views[1].described_points, 3u);
+  EXPECT_EQ(db.views[1].icp_points.size(), 2u);
   // A value no build could write, with the checksum made right again: refused, by name.
   // The script's header is the library's.
   const std::vector<std::uint8_t> payload(file.begin() + 32, file.end());
@@ -156,7 +189,7 @@ TEST(ViewDatabaseTest, TheFuzzersSeedFileIsADatabaseAndItsDamagedValuesAreRefuse
   };
   // The last view's last ICP point, and its first VFH bin.
   EXPECT_NE(refused(file.size() - 4, NAN).find("not a finite number"), std::string::npos);
-  const std::size_t last_view_vfh = file.size() - (4 + 2 * 12) - 2 * (4 + 3 * 12) - 12 - 4 * 90 - 4 * 308;
+  const std::size_t last_view_vfh = file.size() - (4 + 2 * 12) - 4 - 12 - 4 * 90 - 4 * 308;
   EXPECT_NE(refused(last_view_vfh, INFINITY).find("descriptor is not finite"), std::string::npos);
 }
 
@@ -201,6 +234,8 @@ TEST(ViewIndex, ASmallDatabaseGivesExactlyTheExhaustiveSearchesMatches) {
   const ViewDatabase db = random_histograms(50, 80, 1);
   const ViewIndex index(db, /*candidates=*/db.views.size());
   ASSERT_TRUE(index.exhaustive());
+  EXPECT_TRUE(ViewIndex(db, db.views.size() / 2).exhaustive()) << "up to twice the candidates: searched in full";
+  EXPECT_FALSE(ViewIndex(db, db.views.size() / 2 - 1).exhaustive());
   const ViewDatabase queries = random_histograms(1, 20, 2);
   for (const ViewEntry& q : queries.views) {
     const std::vector<Match> all = nearest_views_per_object(db, q.vfh, 20);

@@ -152,45 +152,88 @@ TEST(Recognize, TheSameFrameGivesTheSameResultOnOneThreadAndOnTwo) {
   }
 }
 
-TEST(Recognize, ClustersSearchedSideBySideGiveWhatOneAfterAnotherGives) {
-  // Room frames (the jug and a box among unknown things, walls behind: many clusters, some split,
-  // some with a detection and its remainder): the clusters searched side by side, one per thread,
-  // must give the detections, scores and counts of searching them one after another on one thread.
-  const std::vector<ObjectModel> objects = {{1, "jug", make_jug()}, {2, "box", make_named_shape("box")}};
-  static const ViewDatabase db = build_view_database(objects, DatabaseParams{});
-  RecognizerOptions in_turn;
-  in_turn.run.parallel_clusters = false;
-  const Recognizer side_by_side(db), one_after_another(db, in_turn);
+// The same search gives the same record: counts, detections, poses and scores, bit for bit.
+void expect_same_recognition(const Recognition& a, const Recognition& b) {
+  EXPECT_EQ(a.clusters, b.clusters);
+  EXPECT_EQ(a.regions, b.regions);
+  EXPECT_EQ(a.hypotheses, b.hypotheses);
+  EXPECT_EQ(a.screened, b.screened);
+  EXPECT_EQ(a.split_clusters, b.split_clusters);
+  EXPECT_EQ(a.dropped_as_explained, b.dropped_as_explained);
+  ASSERT_EQ(a.detections.size(), b.detections.size());
+  for (std::size_t i = 0; i < a.detections.size(); ++i) {
+    EXPECT_EQ(a.detections[i].object_id, b.detections[i].object_id);
+    EXPECT_TRUE(a.detections[i].T_camera_object.matrix() == b.detections[i].T_camera_object.matrix());
+    EXPECT_EQ(a.detections[i].score, b.detections[i].score);
+  }
+}
+
+// Room frames with the jug and a box among unknown things, walls behind: many clusters, some
+// split, some with a detection and its remainder.
+const std::vector<ObjectModel>& room_objects() {
+  static const std::vector<ObjectModel> objects = {{1, "jug", make_jug()}, {2, "box", make_named_shape("box")}};
+  return objects;
+}
+const ViewDatabase& room_db() {
+  static const ViewDatabase db = build_view_database(room_objects(), DatabaseParams{});
+  return db;
+}
+std::vector<Frame> room_frames() {
   RoomPresetOptions setup;
   setup.images = 2;
-  const SimDataset ds = make_room_scenes(objects, K, setup, 12);
-  const int threads = thread_count();
-  std::size_t clusters = 0, detections = 0;
+  const SimDataset ds = make_room_scenes(room_objects(), K, setup, 12);
+  std::vector<Frame> frames;
   for (const SimScene& scene : ds.scenes)
     for (std::size_t k = 0; k < scene.images.size(); ++k) {
-      SCOPED_TRACE(k);
-      const Frame frame = frame_from_depth(simulate_image(ds, scene.images[k], SensorModel::kinect_v1(), 200 + k).depth, K);
-      set_thread_count(1);
-      const Recognition a = one_after_another.recognize(frame);
-      set_thread_count(2);
-      const Recognition b = side_by_side.recognize(frame);
-      set_thread_count(threads);
-      clusters += b.clusters;
-      detections += b.detections.size();
-      EXPECT_EQ(a.clusters, b.clusters);
-      EXPECT_EQ(a.regions, b.regions);
-      EXPECT_EQ(a.hypotheses, b.hypotheses);
-      EXPECT_EQ(a.screened, b.screened);
-      EXPECT_EQ(a.split_clusters, b.split_clusters);
-      EXPECT_EQ(a.dropped_as_explained, b.dropped_as_explained);
-      ASSERT_EQ(a.detections.size(), b.detections.size());
-      for (std::size_t i = 0; i < a.detections.size(); ++i) {
-        EXPECT_EQ(a.detections[i].object_id, b.detections[i].object_id);
-        EXPECT_TRUE(a.detections[i].T_camera_object.matrix() == b.detections[i].T_camera_object.matrix());
-        EXPECT_EQ(a.detections[i].score, b.detections[i].score);
-      }
+      frames.push_back(frame_from_depth(simulate_image(ds, scene.images[k], SensorModel::kinect_v1(), 200 + k).depth, K));
     }
-  EXPECT_GT(clusters, 2 * ds.scenes.size()) << "frames of several clusters";
+  return frames;
+}
+
+TEST(Recognize, ClustersSearchedSideBySideGiveWhatOneAfterAnotherGives) {
+  // The clusters searched side by side, one per thread, must give the detections, scores and
+  // counts of searching them one after another on one thread.
+  RecognizerOptions in_turn;
+  in_turn.run.parallel_clusters = false;
+  const Recognizer side_by_side(room_db()), one_after_another(room_db(), in_turn);
+  const int threads = thread_count();
+  std::size_t clusters = 0, detections = 0, frames = 0;
+  for (const Frame& frame : room_frames()) {
+    SCOPED_TRACE(frames++);
+    set_thread_count(1);
+    const Recognition a = one_after_another.recognize(frame);
+    set_thread_count(2);
+    const Recognition b = side_by_side.recognize(frame);
+    set_thread_count(threads);
+    clusters += b.clusters;
+    detections += b.detections.size();
+    expect_same_recognition(a, b);
+  }
+  EXPECT_GT(clusters, 2 * frames) << "frames of several clusters";
+  EXPECT_GT(detections, 0u);
+}
+
+TEST(Recognize, WhatTheDatabaseStoresPreparedGivesWhatTheRecognizerWouldPrepare) {
+  // The database's drawing meshes and filled ICP grids, against a copy without them whose
+  // recognizer makes its own (grids filled as ICP asks): the same search, the same results.
+  ViewDatabase bare = room_db();
+  for (DatabaseObject& o : bare.objects) {
+    ASSERT_FALSE(o.nearest_cells.empty());
+    ASSERT_FALSE(o.drawn_mesh.triangles.empty());
+    o.nearest_cells.clear();
+    o.drawn_mesh = {};
+  }
+  RecognizerOptions lazy;
+  lazy.run.prepare_objects_up_to = 0;
+  const Recognizer stored(room_db()), made(bare, lazy);
+  std::size_t detections = 0, frames = 0;
+  for (const Frame& frame : room_frames()) {
+    SCOPED_TRACE(frames++);
+    const Recognition a = made.recognize(frame);
+    const Recognition b = stored.recognize(frame);
+    detections += b.detections.size();
+    expect_same_recognition(a, b);
+  }
   EXPECT_GT(detections, 0u);
 }
 

@@ -20,9 +20,8 @@ int main(int argc, char** argv) {
   const Transform pose = view_sphere_poses(Eigen::Vector3d::Zero(), params.distance_m, params.subdivisions)[7];
   const MeshInstance inst{&jug, pose};
   const RenderedFrame frame = render(std::span(&inst, 1), params.camera);
-  const ViewEntry view = describe_view(frame.depth, pose, 0, params);
-  PointCloud cloud = PointCloud::from_points(view.points);
-  cloud.normals = view.normals;
+  PointCloud cloud;
+  describe_view(frame.depth, pose, 0, params, &cloud);
   write_pcd(argv[1], cloud, PcdEncoding::BinaryCompressed);
   std::printf("%s: %zu points\n", argv[1], cloud.size());
   return 0;

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -25,6 +26,13 @@ class NearestGrid {
  public:
   /// Indexes the points `tree` was built on (non-finite ones are left out); both must outlive the grid.
   NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> points, float cell_m, float margin_m);
+  /// The same grid with its cells as cells() gave them for the same points, cell and margin (a view
+  /// database stores them filled, so that a process run per frame makes no search). Throws unless
+  /// they fit: cell_count() of them, each 0 or a point's index + 1.
+  NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> points, float cell_m, float margin_m,
+              std::span<const std::uint32_t> cells);
+  /// The cells of a grid over these points: what cells() returns and the constructor above takes.
+  static std::size_t cell_count(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m);
 
   /// The point held by the query's cell and its squared distance to the query; false outside the grid.
   bool nearest(const Eigen::Vector3f& query, std::uint32_t& index, float& squared_distance) const {
@@ -48,6 +56,8 @@ class NearestGrid {
   }
   /// Cells filled so far.
   std::size_t filled() const;
+  /// Every cell, x fastest, then y, then z: 0 where not filled yet, else the held point's index + 1.
+  std::vector<std::uint32_t> cells() const;
   /// Fills every cell now (on all threads), with what queries would fill them with: the first
   /// queries then cost no search. Tens of milliseconds for an object of 30 cm.
   void fill_all() const;
@@ -55,6 +65,13 @@ class NearestGrid {
  private:
   // Searches the tree for the point nearest the cell's centre and stores it (index + 1).
   std::uint32_t fill(std::atomic<std::uint32_t>& cell, std::uint32_t x, std::uint32_t y, std::uint32_t z) const;
+  // The grid's corner and size in cells (nothing where no point is finite), as the constructors make it.
+  struct Extent {
+    Eigen::Vector3f origin = Eigen::Vector3f::Zero();
+    std::uint32_t nx = 0, ny = 0, nz = 0;
+    std::size_t cells() const { return static_cast<std::size_t>(nx) * ny * nz; }
+  };
+  static Extent extent(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m);
   struct FreeDeleter {
     void operator()(void* p) const;
   };

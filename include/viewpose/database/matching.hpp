@@ -33,7 +33,7 @@ std::vector<Match> nearest_views_per_object(const ViewDatabase& db, const Vfh& q
 /// of the differences between views: the `candidates` views nearest the query in those
 /// coordinates are compared in full, and the nearest of them returned. Approximate, so measured:
 /// the true 120 nearest of 80,000 views are among the 500 candidates on the seed frames, and at
-/// least 95 % of them in the test on reshaped copies. A database of no more views than
+/// least 95 % of them in the test on reshaped copies. A database of no more views than twice
 /// `candidates` is searched exhaustively, exactly.
 class ViewIndex {
  public:

@@ -27,6 +27,14 @@ struct DatabaseObject {
   std::vector<Eigen::Vector3f> model_points;   ///< the surface the views saw, object frame, voxel grid
   std::vector<Eigen::Vector3f> model_normals;  ///< outward, one per model point: ICP's target
   Symmetries symmetries;  ///< of the mesh's shape (find_symmetries); none for scanned objects
+  // Made when the database is built, so that a process that recognizes one frame does not make
+  // them (for an object of 20 cm about 8 ms and 15 ms): what recognition would otherwise prepare
+  // on an object's first hypothesis. Empty where not stored; the recognizer then makes them.
+  /// `mesh` simplified for verification's drawing (simplify_for_drawing, DatabaseParams::drawn_mesh_error_m).
+  TriangleMesh drawn_mesh;
+  /// ICP's nearest-point grid over `model_points`, every cell filled (NearestGrid::cells(),
+  /// DatabaseParams::grid_cell_m and grid_margin_m).
+  std::vector<std::uint32_t> nearest_cells;
 };
 
 struct ViewEntry {
@@ -35,9 +43,10 @@ struct ViewEntry {
   Vfh vfh{};
   Crh crh{};
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  ///< view camera frame
-  std::vector<Eigen::Vector3f> points;   ///< the described points (voxel grid), view camera frame
-  std::vector<Eigen::Vector3f> normals;
-  std::vector<Eigen::Vector3f> icp_points;  ///< a coarser copy for ICP (5 mm voxels)
+  /// How many points (voxel grid) the view was described from. The points themselves are not kept:
+  /// recognition needs only the coarser copy below, and they were two thirds of a database's bytes.
+  std::uint32_t described_points = 0;
+  std::vector<Eigen::Vector3f> icp_points;  ///< the described points on a coarser grid (5 mm voxels), view camera frame
 };
 
 struct DatabaseParams {
@@ -47,10 +56,20 @@ struct DatabaseParams {
   float voxel_m = 0.003f;      ///< scene and views are described at this resolution (thesis: 3 mm)
   float icp_voxel_m = 0.005f;  ///< the ICP copy (thesis: 5 mm)
   DescribeOptions describe;
+  // What the prepared data of DatabaseObject was made with; the recognizer uses it where its own
+  // options are the same (they are by default).
+  float drawn_mesh_error_m = 0.002f;  ///< RecognizerOptions::verify_mesh_error_m
+  float grid_cell_m = 0.003f;         ///< IcpOptions::grid_cell_m
+  float grid_margin_m = 0.04f;        ///< IcpOptions::reach_m()
+  /// Nearest-point grids are stored for the objects, in order, while their cells total at most this
+  /// many bytes (a few MB an object; a large database prepares the rest as scenes suggest them).
+  std::size_t max_grid_bytes = std::size_t{256} << 20;
 };
 
 struct ViewDatabase {
-  static constexpr std::uint32_t kFormatVersion = 2;  // 2: objects carry their symmetries
+  // 2: objects carry their symmetries. 3: objects carry a drawing mesh and a filled ICP grid; views
+  // keep only their ICP points.
+  static constexpr std::uint32_t kFormatVersion = 3;
   DatabaseParams params;
   std::vector<DatabaseObject> objects;
   std::vector<ViewEntry> views;
@@ -81,8 +100,13 @@ int add_captured_view(ViewDatabase& db, const PointCloud& cloud, const std::stri
 /// The cloud a view (or a scene frame) is described from: its valid pixels, voxelized.
 PointCloud view_points(const DepthImage& depth, const CameraIntrinsics& K, float voxel_m);
 
-/// Describes one rendered view of an object into a database entry.
+/// Describes one rendered view of an object into a database entry; `described` (if given) gets
+/// the cloud it was described from (points and normals, view camera frame).
 ViewEntry describe_view(const DepthImage& depth, const Transform& T_view_object, std::uint32_t object,
-                        const DatabaseParams& params);
+                        const DatabaseParams& params, PointCloud* described = nullptr);
+
+/// Makes an object's prepared data (DatabaseObject::drawn_mesh, nearest_cells) as `params` says;
+/// `grid_bytes_left` is what DatabaseParams::max_grid_bytes still allows, less what this grid takes.
+void prepare_object(DatabaseObject& object, const DatabaseParams& params, std::size_t& grid_bytes_left);
 
 }  // namespace viewpose
