@@ -30,7 +30,10 @@ NearestGrid::Extent NearestGrid::extent(std::span<const Eigen::Vector3f> points,
   e.origin = lo - Eigen::Vector3f::Constant(margin_m);
   const Eigen::Vector3f size = (hi - lo + Eigen::Vector3f::Constant(2 * margin_m)) * (1.0f / cell_m);
   const double cells = (std::floor(size.x()) + 1.0) * (std::floor(size.y()) + 1.0) * (std::floor(size.z()) + 1.0);
-  if (cells > 2e8) throw Error(fmt::format("nearest grid: {:.0f} cells of {} m is too many; use larger cells", cells, cell_m));
+  if (cells > kMaxCells) {
+    e.too_many = cells;
+    return e;
+  }
   e.nx = static_cast<std::uint32_t>(size.x()) + 1;
   e.ny = static_cast<std::uint32_t>(size.y()) + 1;
   e.nz = static_cast<std::uint32_t>(size.z()) + 1;
@@ -38,12 +41,14 @@ NearestGrid::Extent NearestGrid::extent(std::span<const Eigen::Vector3f> points,
 }
 
 std::size_t NearestGrid::cell_count(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m) {
-  return extent(points, cell_m, margin_m).cells();
+  const Extent e = extent(points, cell_m, margin_m);
+  return e.too_many > 0 ? std::numeric_limits<std::size_t>::max() : e.cells();
 }
 
 NearestGrid::NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> points, float cell_m, float margin_m)
     : tree_(&tree), points_(points) {
   const Extent e = extent(points, cell_m, margin_m);
+  if (e.too_many > 0) throw Error(fmt::format("nearest grid: {:.0f} cells of {} m is too many; use larger cells", e.too_many, cell_m));
   if (e.cells() == 0 || tree.size() == 0) return;  // every query finds nothing
   origin_ = e.origin;
   cell_ = cell_m;

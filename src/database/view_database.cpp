@@ -401,7 +401,11 @@ int add_captured_view(ViewDatabase& db, const PointCloud& cloud, const std::stri
   TriangleMesh hull;
   hull.vertices = object.model_points;
   object.diameter_m = mesh_diameter(hull);
-  object.nearest_cells.clear();  // of the model points before this view: the recognizer fills its own
+  // Its grid made again for the grown model, within what the database's other grids leave.
+  std::size_t others = 0;
+  for (const DatabaseObject& o : db.objects) others += &o == &object ? 0 : o.nearest_cells.size() * sizeof(std::uint32_t);
+  std::size_t grid_bytes_left = db.params.max_grid_bytes > others ? db.params.max_grid_bytes - others : 0;
+  prepare_object(object, db.params, grid_bytes_left);
   return object.id;
 }
 
@@ -452,10 +456,10 @@ void check_viewable(const std::string& name, const BoundingBox& box, const Datab
 
 void prepare_object(DatabaseObject& object, const DatabaseParams& params, std::size_t& grid_bytes_left) {
   object.drawn_mesh = object.mesh.triangles.empty() ? TriangleMesh{} : simplify_for_drawing(object.mesh, params.drawn_mesh_error_m);
-  object.nearest_cells.clear();
-  const std::size_t bytes = NearestGrid::cell_count(object.model_points, params.grid_cell_m, params.grid_margin_m) * sizeof(std::uint32_t);
-  if (bytes == 0 || bytes > grid_bytes_left) return;
-  grid_bytes_left -= bytes;
+  object.nearest_cells = std::vector<std::uint32_t>();
+  const std::size_t cells = NearestGrid::cell_count(object.model_points, params.grid_cell_m, params.grid_margin_m);
+  if (cells == 0 || cells > grid_bytes_left / sizeof(std::uint32_t)) return;  // (a scan of a whole room: too many)
+  grid_bytes_left -= cells * sizeof(std::uint32_t);
   const KdTree tree(object.model_points);
   const NearestGrid grid(tree, object.model_points, params.grid_cell_m, params.grid_margin_m);
   grid.fill_all();

@@ -39,8 +39,14 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
     largest_diameter_m_ = std::max(largest_diameter_m_, o.diameter_m);
   }
   if (db.objects.size() <= options_.run.prepare_objects_up_to) {
-    for (std::uint32_t o = 0; o < db.objects.size() && options_.icp.grid_cell_m > 0; ++o) {
-      icp_target(o).grid(options_.icp.grid_cell_m, options_.icp.reach_m()).fill_all();
+    const auto objects = static_cast<std::ptrdiff_t>(db.objects.size());
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::ptrdiff_t o = 0; o < objects; ++o) {
+      const IcpTarget& target = icp_target(static_cast<std::uint32_t>(o));
+      if (options_.icp.grid_cell_m > 0) target.grid(options_.icp.grid_cell_m, options_.icp.reach_m());
+    }
+    for (std::uint32_t o = 0; o < db.objects.size() && options_.icp.grid_cell_m > 0 && options_.run.fill_grids_at_start; ++o) {
+      icp_target(o).grid(options_.icp.grid_cell_m, options_.icp.reach_m()).fill_all();  // (nothing to do where stored)
     }
   }
   // Scenes are described at the database's resolution, so that their VFHs are comparable.

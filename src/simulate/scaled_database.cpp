@@ -19,7 +19,7 @@ ViewDatabase scaled_database(const ViewDatabase& db, std::size_t objects, std::u
     object.id = static_cast<int>(o + 1);
     if (o >= db.objects.size()) {
       object.name = fmt::format("{}_{}", object.name, o / db.objects.size());
-      object.nearest_cells.clear();  // as a database of this many objects would not store them all
+      object.nearest_cells = std::vector<std::uint32_t>();  // freed (not cleared): a database this large stores few
     }
     out.objects.push_back(std::move(object));
     for (const ViewEntry& v : db.views) {

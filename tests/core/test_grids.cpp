@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "test_support.hpp"
@@ -178,6 +179,8 @@ TEST(NearestGrid, EmptyOrNonFinitePointsFindNothingAndBadSizesThrow) {
   EXPECT_FALSE(grid.nearest(Eigen::Vector3f(1, 2, 3.5f), i, d));
   EXPECT_THROW(NearestGrid(one_tree, one, 0.0f, 0.01f), Error);
   EXPECT_THROW(NearestGrid(one_tree, one, 1e-6f, 10.0f), Error) << "a grid of 10^19 cells is refused, not allocated";
+  EXPECT_EQ(NearestGrid::cell_count(one, 1e-6f, 10.0f), std::numeric_limits<std::size_t>::max()) << "counted, not thrown";
+  EXPECT_EQ(NearestGrid::cell_count(none, 0.003f, 0.01f), 0u);
 }
 
 TEST(OccupancyGrid, LevelsAreTwoInAPointsCellOneBesideItAndZeroFarther) {

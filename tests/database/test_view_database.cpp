@@ -11,6 +11,7 @@
 #include "viewpose/core/nearest_grid.hpp"
 #include "viewpose/render/rasterizer.hpp"
 #include "viewpose/render/simplify.hpp"
+#include "viewpose/render/view_sphere.hpp"
 #include "viewpose/render/shapes.hpp"
 #include "viewpose/simulate/scaled_database.hpp"
 
@@ -121,7 +122,29 @@ TEST(ViewDatabaseTest, SurvivesAWriteReadRoundTripBitForBit) {
   }
 }
 
-TEST(ViewDatabaseTest, GridsAreStoredWithinTheirByteLimitAndNotForChangedModelPoints) {
+TEST(ViewDatabaseTest, AScannedObjectsGridIsMadeAgainForItsGrownModel) {
+  // Two captured views of the jug (rendered here as a sensor would see them): the model grows with
+  // the second, and the stored grid must be the grown model's.
+  const TriangleMesh jug = make_jug();
+  const DatabaseParams params;
+  ViewDatabase db;
+  for (int k : {0, 7}) {
+    const Transform pose = view_sphere_poses(Eigen::Vector3d::Zero(), params.distance_m, params.subdivisions)[static_cast<std::size_t>(k)];
+    const MeshInstance inst{&jug, pose};
+    const RenderedFrame frame = render(std::span(&inst, 1), params.camera);
+    add_captured_view(db, depth_to_cloud(frame.depth, params.camera), "scanned jug");
+  }
+  ASSERT_EQ(db.objects.size(), 1u);
+  ASSERT_EQ(db.views.size(), 2u);
+  const DatabaseObject& o = db.objects[0];
+  EXPECT_TRUE(o.drawn_mesh.triangles.empty()) << "a scan has no mesh to draw";
+  const KdTree tree(o.model_points);
+  const NearestGrid grid(tree, o.model_points, params.grid_cell_m, params.grid_margin_m);
+  grid.fill_all();
+  EXPECT_EQ(o.nearest_cells, grid.cells());
+}
+
+TEST(ViewDatabaseTest, GridsAreStoredWithinTheirByteLimitAndDamagedOnesAreRefused) {
   const std::vector<ObjectModel> models = {{1, "jug", make_jug()}, {5, "can", make_can()}};
   DatabaseParams p;
   p.subdivisions = 0;

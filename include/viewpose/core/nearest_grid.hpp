@@ -31,8 +31,10 @@ class NearestGrid {
   /// they fit: cell_count() of them, each 0 or a point's index + 1.
   NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> points, float cell_m, float margin_m,
               std::span<const std::uint32_t> cells);
-  /// The cells of a grid over these points: what cells() returns and the constructor above takes.
+  /// The cells of a grid over these points: what cells() returns and the constructor above takes
+  /// (the largest size_t where there would be more than the constructors allow).
   static std::size_t cell_count(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m);
+  static constexpr double kMaxCells = 2e8;  ///< the constructors refuse grids of more (800 MB)
 
   /// The point held by the query's cell and its squared distance to the query; false outside the grid.
   bool nearest(const Eigen::Vector3f& query, std::uint32_t& index, float& squared_distance) const {
@@ -69,6 +71,7 @@ class NearestGrid {
   struct Extent {
     Eigen::Vector3f origin = Eigen::Vector3f::Zero();
     std::uint32_t nx = 0, ny = 0, nz = 0;
+    double too_many = 0;  // the cells there would be, where more than kMaxCells (then no size)
     std::size_t cells() const { return static_cast<std::size_t>(nx) * ny * nz; }
   };
   static Extent extent(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m);

@@ -168,11 +168,16 @@ struct RunOptions {
   /// is taken, as one after the other would). A fixed number, not the thread count, so that results
   /// do not depend on the machine; enough to keep a few cores busy.
   std::size_t batch = 4;
-  /// Databases of at most this many objects are prepared for ICP when the recognizer is made (about
-  /// 0.1 s an object), so that the first frames run as fast as the rest; larger ones object by
-  /// object as scenes suggest them (the first hypotheses of an object then cost a few milliseconds
-  /// more while its nearest-point grid fills). Either way the results are the same.
+  /// Databases of at most this many objects are prepared for ICP and verification when the
+  /// recognizer is made (a millisecond or two an object with what the database stores, on all
+  /// threads), so that the first frames run as fast as the rest; larger ones object by object as
+  /// scenes suggest them. Either way the results are the same.
   std::size_t prepare_objects_up_to = 16;
+  /// Those objects' nearest-point grids that the database does not store (DatabaseParams::
+  /// max_grid_bytes, scanned objects) are filled whole then too (about 0.1 s an object); false:
+  /// they fill where ICP looks (the first hypotheses of an object cost a few milliseconds more),
+  /// which is sooner for a process that recognizes one frame.
+  bool fill_grids_at_start = true;
 };
 
 /// Everything a Recognizer can be told, by stage. (Every member has a default initializer, so that
