@@ -15,6 +15,9 @@ Segmentation segment_scene(const PointCloud& frame, const SegmentOptions& option
   s.planes = std::move(planes.removed);
   if (times) times->planes_ms += ms_since(t);
   t = Clock::now();
+  if (options.max_depth_m > 0) {
+    std::erase_if(planes.remaining, [&](std::uint32_t i) { return !(frame.points[i].z() <= options.max_depth_m); });
+  }
   s.points = voxel_downsample(cluster_points(frame, planes.remaining), options.voxel_m);
   if (times) times->downsample_ms += ms_since(t);
   t = Clock::now();

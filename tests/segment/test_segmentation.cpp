@@ -81,6 +81,21 @@ TEST(Planes, FindsTheTableAtItsDistanceAndNormalAndKeepsTheBoxes) {
   EXPECT_GT(r.remaining.size(), (pts.size() - table) * 9 / 10);  // the boxes stay
 }
 
+TEST(Segmentation, WhatLiesPastTheSensorsUsefulRangeFormsNoCluster) {
+  // A box at 1 m and a box at 4.5 m, where a Kinect's depth is centimetres of noise: only the near
+  // one is a cluster by default; with no limit, both.
+  std::vector<Eigen::Vector3f> pts;
+  add_box(pts, {-0.1f, -0.1f, 0.95f}, {0.05f, 0.05f, 1.1f});
+  add_box(pts, {0.3f, 0.3f, 4.45f}, {0.5f, 0.5f, 4.65f});
+  const PointCloud cloud = PointCloud::from_points(pts);
+  const Segmentation near = segment_scene(cloud);
+  ASSERT_EQ(near.clusters.size(), 1u);
+  for (const Eigen::Vector3f& p : near.points.points) EXPECT_LE(p.z(), SegmentOptions{}.max_depth_m);
+  SegmentOptions unlimited;
+  unlimited.max_depth_m = 0;
+  EXPECT_EQ(segment_scene(cloud, unlimited).clusters.size(), 2u);
+}
+
 TEST(Clusters, SeparatedBoxesAreSeparateClustersInBothVersions) {
   // Three boxes 5 cm apart, rendered as a depth frame so that the organized version can run too.
   const CameraIntrinsics K = CameraIntrinsics::kinect_v1();

@@ -13,6 +13,11 @@ namespace viewpose {
 
 struct SegmentOptions {
   float voxel_m = 0.003f;  ///< thesis: 3 mm
+  /// What stands on the planes farther than this (depth, metres) is left out of the clusters: a
+  /// Kinect's or Xtion's depth there is centimetres of noise, and verification gives no verdict on
+  /// poses past 3.5 m (VerifyOptions::max_depth_m). A far room's wall, cabinets and clutter were
+  /// most of an office frame's points and its segmentation's time. (0: no limit.)
+  float max_depth_m = 4.0f;
   PlaneOptions planes;
   ClusterOptions clusters;
 };
