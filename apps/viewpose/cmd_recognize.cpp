@@ -21,6 +21,7 @@
 #include "viewpose/io/bop.hpp"
 #include "viewpose/io/bop_results.hpp"
 #include "viewpose/core/file.hpp"
+#include "viewpose/core/threads.hpp"
 #include "viewpose/io/image_png.hpp"
 #include "viewpose/io/ply.hpp"
 #include "viewpose/io/recognition_json.hpp"
@@ -135,7 +136,11 @@ void add_recognize_command(CLI::App& app, int& exit_code) {
   cmd->callback([o, &exit_code] {
     // The database and the scene are read side by side: most of a one-frame process's start-up.
     // (Should the database fail, its error is the one said; the scene's reading is waited for.)
-    auto scene = std::async(std::launch::async, [&] { return load_scene(o->scene, o->camera); });
+    // (OpenMP's thread count is per thread: the reading thread is given --threads too.)
+    auto scene = std::async(std::launch::async, [&, threads = thread_count()] {
+      set_thread_count(threads);
+      return load_scene(o->scene, o->camera);
+    });
     const ViewDatabase db = ViewDatabase::load(o->flags.db);
     const Frame frame = scene.get();
     // One frame: ICP grids the database does not store fill only where its hypotheses look,

@@ -68,10 +68,22 @@ NearestGrid::NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> po
     : NearestGrid(tree, points, cell_m, margin_m) {
   const std::size_t n = static_cast<std::size_t>(nx_) * ny_ * nz_;
   if (cells.size() != n) throw Error(fmt::format("nearest grid: {} cells given for a grid of {}", cells.size(), n));
+  if (!fits(points, cell_m, margin_m, cells)) throw Error(fmt::format("nearest grid: a cell holds a point past the {} given", points.size()));
+  if (n > 0) std::memcpy(static_cast<void*>(cells_.get()), cells.data(), n * sizeof(std::uint32_t));
+}
+
+bool NearestGrid::fits(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m, std::span<const std::uint32_t> cells) {
+  if (cells.size() != cell_count(points, cell_m, margin_m)) return false;
   std::uint32_t largest = 0;
   for (std::uint32_t c : cells) largest = std::max(largest, c);
-  if (largest > points.size()) throw Error(fmt::format("nearest grid: a cell holds point {} of {}", largest - 1, points.size()));
-  if (n > 0) std::memcpy(static_cast<void*>(cells_.get()), cells.data(), n * sizeof(std::uint32_t));
+  return largest <= points.size();
+}
+
+std::vector<std::uint32_t> filled_nearest_cells(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m) {
+  const KdTree tree(points);
+  const NearestGrid grid(tree, points, cell_m, margin_m);
+  grid.fill_all();
+  return grid.cells();
 }
 
 void NearestGrid::fill_all() const {

@@ -145,6 +145,7 @@ nlohmann::json params_json(const DatabaseParams& p) {
           {"drawn_mesh_error_m", p.drawn_mesh_error_m},
           {"grid_cell_m", p.grid_cell_m},
           {"grid_margin_m", p.grid_margin_m},
+          {"max_grid_bytes", p.max_grid_bytes},
           {"vfh", {{"normalize_bins", p.describe.vfh.normalize_bins},
                    {"normalize_distances", p.describe.vfh.normalize_distances},
                    {"size_component", p.describe.vfh.size_component},
@@ -164,7 +165,9 @@ DatabaseParams params_from_json(const std::string& text, const Reader& r) {
     };
     const auto length = [&](const nlohmann::json& x) {
       const double d = x.get<double>();
-      if (!(std::isfinite(d) && d > 0 && d <= 1.0)) r.fail("build parameters are out of range (voxel or normal radius)");
+      if (!(std::isfinite(d) && d > 0 && d <= 1.0)) {
+        r.fail("build parameters are out of range (a voxel, normal radius, drawing error or grid size is not in (0, 1] m)");
+      }
       return static_cast<float>(d);
     };
     const auto& c = j.at("camera");
@@ -178,6 +181,11 @@ DatabaseParams params_from_json(const std::string& text, const Reader& r) {
     p.drawn_mesh_error_m = length(j.at("drawn_mesh_error_m"));
     p.grid_cell_m = length(j.at("grid_cell_m"));
     p.grid_margin_m = length(j.at("grid_margin_m"));
+    const double max_grid_bytes = j.at("max_grid_bytes").get<double>();
+    if (!(max_grid_bytes >= 0 && max_grid_bytes <= 1e15) || max_grid_bytes != std::floor(max_grid_bytes)) {
+      r.fail("build parameters are out of range (max_grid_bytes)");
+    }
+    p.max_grid_bytes = static_cast<std::size_t>(max_grid_bytes);
     const auto& v = j.at("vfh");
     p.describe.vfh.normalize_bins = v.at("normalize_bins").get<bool>();
     p.describe.vfh.normalize_distances = v.at("normalize_distances").get<bool>();
@@ -321,14 +329,9 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
     }
     o.drawn_mesh = r.get_mesh();
     o.nearest_cells = r.get_cells();
-    if (!o.nearest_cells.empty()) {
-      // As NearestGrid would refuse them, but here, so that a damaged file is refused when it is read.
-      std::uint32_t largest = 0;
-      for (std::uint32_t c : o.nearest_cells) largest = std::max(largest, c);
-      if (o.nearest_cells.size() != NearestGrid::cell_count(o.model_points, db.params.grid_cell_m, db.params.grid_margin_m) ||
-          largest > o.model_points.size()) {
-        r.fail("an object's nearest-point grid does not fit its model points");
-      }
+    // As NearestGrid would refuse them, but here, so that a damaged file is refused when it is read.
+    if (!o.nearest_cells.empty() && !NearestGrid::fits(o.model_points, db.params.grid_cell_m, db.params.grid_margin_m, o.nearest_cells)) {
+      r.fail("an object's nearest-point grid does not fit its model points");
     }
     db.objects.push_back(std::move(o));
   }
@@ -404,8 +407,8 @@ int add_captured_view(ViewDatabase& db, const PointCloud& cloud, const std::stri
   hull.vertices = object.model_points;
   object.diameter_m = mesh_diameter(hull);
   // Its grid made again for the grown model, within what the database's other grids leave.
-  std::size_t others = 0;
-  for (const DatabaseObject& o : db.objects) others += &o == &object ? 0 : o.nearest_cells.size() * sizeof(std::uint32_t);
+  object.nearest_cells = std::vector<std::uint32_t>();
+  const std::size_t others = stored_grid_bytes(db);
   std::size_t grid_bytes_left = db.params.max_grid_bytes > others ? db.params.max_grid_bytes - others : 0;
   prepare_object(object, db.params, grid_bytes_left);
   return object.id;
@@ -462,15 +465,24 @@ void prepare_object(DatabaseObject& object, const DatabaseParams& params, std::s
   const std::size_t cells = NearestGrid::cell_count(object.model_points, params.grid_cell_m, params.grid_margin_m);
   if (cells == 0 || cells > grid_bytes_left / sizeof(std::uint32_t)) return;  // (a scan of a whole room: too many)
   grid_bytes_left -= cells * sizeof(std::uint32_t);
-  const KdTree tree(object.model_points);
-  const NearestGrid grid(tree, object.model_points, params.grid_cell_m, params.grid_margin_m);
-  grid.fill_all();
-  object.nearest_cells = grid.cells();
+  object.nearest_cells = filled_nearest_cells(object.model_points, params.grid_cell_m, params.grid_margin_m);
+}
+
+std::size_t stored_grid_bytes(const ViewDatabase& db) {
+  std::size_t bytes = 0;
+  for (const DatabaseObject& o : db.objects) bytes += o.nearest_cells.size() * sizeof(std::uint32_t);
+  return bytes;
 }
 
 ViewDatabase build_view_database(std::span<const ObjectModel> objects, const DatabaseParams& params,
                                  const std::function<void(std::size_t, std::size_t)>& progress) {
   params.camera.validate();
+  // What the file will hold must be readable back: lengths in (0, 1] m, as the reader asks.
+  for (const auto& [name, value] : {std::pair{"voxel_m", params.voxel_m}, {"icp_voxel_m", params.icp_voxel_m},
+                                    {"drawn_mesh_error_m", params.drawn_mesh_error_m}, {"grid_cell_m", params.grid_cell_m},
+                                    {"grid_margin_m", params.grid_margin_m}}) {
+    if (!(value > 0 && value <= 1.0f)) throw Error(fmt::format("db build: {} is {}; it must be in (0, 1] m", name, value));
+  }
   ViewDatabase db;
   db.params = params;
   std::size_t grid_bytes_left = params.max_grid_bytes;

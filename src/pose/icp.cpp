@@ -18,12 +18,14 @@ IcpTarget::IcpTarget(std::vector<Eigen::Vector3f> p, std::vector<Eigen::Vector3f
   }
 }
 
-const NearestGrid& IcpTarget::grid(float cell_m, float margin_m, std::span<const std::uint32_t> cells) const {
+const NearestGrid* IcpTarget::grid(float cell_m, float margin_m, std::span<const std::uint32_t> cells) const {
+  if (!(cell_m > 0)) return nullptr;
   std::call_once(grid_once_, [&] {
+    if (NearestGrid::cell_count(points, cell_m, margin_m) == std::numeric_limits<std::size_t>::max()) return;
     grid_ = cells.empty() ? std::make_unique<NearestGrid>(tree, points, cell_m, margin_m)
                           : std::make_unique<NearestGrid>(tree, points, cell_m, margin_m, cells);
   });
-  return *grid_;
+  return grid_.get();
 }
 
 namespace {
@@ -51,7 +53,7 @@ class Correspondences {
     IcpTarget::Surfel q;        // the target's point nearest it; NaN when none was found
   };
   Correspondences(const IcpTarget& t, const IcpOptions& o)
-      : target_(t), grid_(o.grid_cell_m > 0 ? &t.grid(o.grid_cell_m, o.reach_m()) : nullptr) {}
+      : target_(t), grid_(t.grid(o.grid_cell_m, o.reach_m())) {}
 
   std::span<const Pair> find(std::span<const Eigen::Vector3f> source, const Transform& T) {
     const Eigen::Matrix3f R = T.linear().cast<float>();

@@ -3,6 +3,8 @@
 #include "viewpose/core/stopwatch.hpp"
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <mutex>
 #include <limits>
 #include <span>
 
@@ -39,14 +41,22 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
     largest_diameter_m_ = std::max(largest_diameter_m_, o.diameter_m);
   }
   if (db.objects.size() <= options_.run.prepare_objects_up_to) {
+    // (An exception may not leave a parallel loop: the first is kept and thrown after it.)
     const auto objects = static_cast<std::ptrdiff_t>(db.objects.size());
+    std::exception_ptr failed;
+    std::mutex failed_mutex;
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::ptrdiff_t o = 0; o < objects; ++o) {
-      const IcpTarget& target = icp_target(static_cast<std::uint32_t>(o));
-      if (options_.icp.grid_cell_m > 0) target.grid(options_.icp.grid_cell_m, options_.icp.reach_m());
+      try {
+        icp_target(static_cast<std::uint32_t>(o)).grid(options_.icp.grid_cell_m, options_.icp.reach_m());
+      } catch (...) {
+        const std::lock_guard lock(failed_mutex);
+        if (!failed) failed = std::current_exception();
+      }
     }
-    for (std::uint32_t o = 0; o < db.objects.size() && options_.icp.grid_cell_m > 0 && options_.run.fill_grids_at_start; ++o) {
-      icp_target(o).grid(options_.icp.grid_cell_m, options_.icp.reach_m()).fill_all();  // (nothing to do where stored)
+    if (failed) std::rethrow_exception(failed);
+    for (std::uint32_t o = 0; o < db.objects.size() && options_.run.fill_grids_at_start; ++o) {
+      if (const NearestGrid* grid = icp_target(o).grid(options_.icp.grid_cell_m, options_.icp.reach_m())) grid->fill_all();  // (nothing to do where stored)
     }
   }
   // Scenes are described at the database's resolution, so that their VFHs are comparable.
@@ -260,7 +270,7 @@ std::vector<char> Recognizer::explained_points(const Detection& detection, const
   std::vector<char> explained(points.size(), 0);
   const Transform T_object_camera = detection.T_camera_object.inverse();
   const IcpTarget& model = icp_target(detection.object_index);
-  const NearestGrid* grid = options_.icp.grid_cell_m > 0 ? &model.grid(options_.icp.grid_cell_m, options_.icp.reach_m()) : nullptr;
+  const NearestGrid* grid = model.grid(options_.icp.grid_cell_m, options_.icp.reach_m());
   const float slack = grid ? std::sqrt(3.0f) * options_.icp.grid_cell_m : 0.0f;  // how far off the grid may be
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3f& p = points.points[i];
@@ -390,7 +400,7 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
     Candidate& c = first[k];
     const IcpTarget& target = icp_target(c.object);
     // The grid keeps the sizes of its first use: the full schedule's reach, not the screen's.
-    if (options_.icp.grid_cell_m > 0) target.grid(options_.icp.grid_cell_m, options_.icp.reach_m());
+    target.grid(options_.icp.grid_cell_m, options_.icp.reach_m());
     const IcpResult r = icp_point_to_plane(region.icp_source, target, c.T_camera_object.inverse(), screen_icp_);
     c.screen_fitness = icp_fitness(region.icp_source, target, r.T_target_source, screen_reach_m_, screen_icp_);
   }

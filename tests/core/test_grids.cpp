@@ -124,7 +124,10 @@ TEST(NearestGrid, AGridMadeFromAnothersCellsAnswersAsItDoesAndRefusesCellsThatDo
   test::expect_error([&] { NearestGrid(tree, pts, cell, margin, std::span(cells).subspan(1)); }, "cells given for a grid of");
   std::vector<std::uint32_t> past = cells;
   past[past.size() / 3] = static_cast<std::uint32_t>(pts.size() + 1);
-  test::expect_error([&] { NearestGrid(tree, pts, cell, margin, past); }, "a cell holds point");
+  test::expect_error([&] { NearestGrid(tree, pts, cell, margin, past); }, "a cell holds a point past");
+  EXPECT_TRUE(NearestGrid::fits(pts, cell, margin, cells));
+  EXPECT_FALSE(NearestGrid::fits(pts, cell, margin, past));
+  EXPECT_EQ(filled_nearest_cells(pts, cell, margin), cells);
   test::expect_error([&] { NearestGrid(tree, pts, cell * 2, margin, cells); }, "cells given for a grid of");
 }
 

@@ -113,12 +113,11 @@ TEST(ViewDatabaseTest, SurvivesAWriteReadRoundTripBitForBit) {
     const DatabaseObject& object = back.objects[o];
     EXPECT_GT(object.drawn_mesh.triangles.size(), 8u);
     EXPECT_LT(object.drawn_mesh.triangles.size(), object.mesh.triangles.size() / 2);
-    EXPECT_EQ(object.drawn_mesh.triangles, simplify_for_drawing(object.mesh, db.params.drawn_mesh_error_m).triangles);
+    const TriangleMesh drawn = simplify_for_drawing(object.mesh, db.params.drawn_mesh_error_m);
+    EXPECT_EQ(object.drawn_mesh.triangles, drawn.triangles);
+    EXPECT_EQ(object.drawn_mesh.vertices, drawn.vertices);
     ASSERT_EQ(object.nearest_cells.size(), NearestGrid::cell_count(object.model_points, db.params.grid_cell_m, db.params.grid_margin_m));
-    const KdTree tree(object.model_points);
-    const NearestGrid grid(tree, object.model_points, db.params.grid_cell_m, db.params.grid_margin_m);
-    grid.fill_all();
-    EXPECT_EQ(object.nearest_cells, grid.cells());
+    EXPECT_EQ(object.nearest_cells, filled_nearest_cells(object.model_points, db.params.grid_cell_m, db.params.grid_margin_m));
   }
 }
 
@@ -138,21 +137,30 @@ TEST(ViewDatabaseTest, AScannedObjectsGridIsMadeAgainForItsGrownModel) {
   ASSERT_EQ(db.views.size(), 2u);
   const DatabaseObject& o = db.objects[0];
   EXPECT_TRUE(o.drawn_mesh.triangles.empty()) << "a scan has no mesh to draw";
-  const KdTree tree(o.model_points);
-  const NearestGrid grid(tree, o.model_points, params.grid_cell_m, params.grid_margin_m);
-  grid.fill_all();
-  EXPECT_EQ(o.nearest_cells, grid.cells());
+  EXPECT_EQ(o.nearest_cells, filled_nearest_cells(o.model_points, params.grid_cell_m, params.grid_margin_m));
 }
 
 TEST(ViewDatabaseTest, GridsAreStoredWithinTheirByteLimitAndDamagedOnesAreRefused) {
   const std::vector<ObjectModel> models = {{1, "jug", make_jug()}, {5, "can", make_can()}};
   DatabaseParams p;
   p.subdivisions = 0;
-  p.max_grid_bytes = small_db().objects[0].nearest_cells.size() * sizeof(std::uint32_t);  // the first object's alone
+  // Room for the smaller grid alone: the larger is not stored, whichever comes first, and the
+  // smaller is (an object that does not fit does not stop the next).
+  const std::size_t jug = small_db().objects[0].nearest_cells.size(), can = small_db().objects[1].nearest_cells.size();
+  ASSERT_NE(jug, can);
+  p.max_grid_bytes = std::min(jug, can) * sizeof(std::uint32_t);
   const ViewDatabase db = build_view_database(models, p);
-  EXPECT_FALSE(db.objects[0].nearest_cells.empty());
-  EXPECT_TRUE(db.objects[1].nearest_cells.empty()) << "over the limit: the recognizer fills it";
-  EXPECT_FALSE(db.objects[1].drawn_mesh.triangles.empty()) << "drawing meshes are small: always stored";
+  const std::size_t larger = jug > can ? 0 : 1;
+  EXPECT_TRUE(db.objects[larger].nearest_cells.empty()) << "over the limit: the recognizer fills it";
+  EXPECT_FALSE(db.objects[1 - larger].nearest_cells.empty());
+  EXPECT_FALSE(db.objects[larger].drawn_mesh.triangles.empty()) << "drawing meshes are small: always stored";
+  EXPECT_EQ(stored_grid_bytes(db), std::min(jug, can) * sizeof(std::uint32_t));
+  // The limit is kept in the file, for add-view.
+  EXPECT_EQ(ViewDatabase::deserialize(db.serialize(), "limit.vpdb").params.max_grid_bytes, p.max_grid_bytes);
+  // Parameters the file could not be read back with are refused before anything is rendered.
+  DatabaseParams no_cells = p;
+  no_cells.grid_cell_m = 0;
+  expect_error([&] { build_view_database(models, no_cells); }, "grid_cell_m is 0");
   // A damaged grid (a cell past the model's points) is refused when the file is read.
   ViewDatabase bad = small_db();
   bad.objects[1].nearest_cells[5] = static_cast<std::uint32_t>(bad.objects[1].model_points.size() + 1);
@@ -195,6 +203,11 @@ TEST(ViewDatabaseTest, TheFuzzersSeedFileIsADatabaseAndItsDamagedValuesAreRefuse
   EXPECT_EQ(db.views.size(), 2u);
   EXPECT_EQ(db.views[1].described_points, 3u);
   EXPECT_EQ(db.views[1].icp_points.size(), 2u);
+  // The seed with a stored ICP grid (5 cm cells) is read with it.
+  const auto grid_seed = read_file_bytes(std::filesystem::path(VIEWPOSE_SOURCE_DIR) / "fuzz/corpus/view_database/grid_payload");
+  const ViewDatabase with_grid = ViewDatabase::deserialize(ViewDatabase::file_from_payload(std::span(grid_seed).subspan(1)), "grid");
+  ASSERT_EQ(with_grid.objects.size(), 1u);
+  EXPECT_EQ(with_grid.objects[0].nearest_cells.size(), 32u);
   // A value no build could write, with the checksum made right again: refused, by name.
   // The script's header is the library's.
   const std::vector<std::uint8_t> payload(file.begin() + 32, file.end());

@@ -28,6 +28,24 @@ void box_surface(std::vector<Eigen::Vector3f>& points, std::vector<Eigen::Vector
     }
 }
 
+TEST(Icp, ATargetTooLargeForAGridIsSearchedInItsTree) {
+  // A box and a point 3 km away: a 3 mm grid over both would be 10^18 cells. None is made, and ICP
+  // still recovers a pose from the k-d tree.
+  std::vector<Eigen::Vector3f> points, normals;
+  box_surface(points, normals);
+  points.emplace_back(3000.0f, 0.0f, 0.0f);
+  normals.emplace_back(1.0f, 0.0f, 0.0f);
+  const IcpTarget target(points, normals);
+  EXPECT_EQ(target.grid(0.003f, 0.04f), nullptr);
+  EXPECT_EQ(target.grid(0.0f, 0.04f), nullptr);
+  std::vector<Eigen::Vector3f> source;
+  for (std::size_t i = 0; i + 1 < points.size(); ++i)
+    if (normals[i].z() > 0) source.push_back(points[i] + Eigen::Vector3f(0.003f, 0.0f, 0.002f));
+  const IcpResult r = icp_point_to_plane(source, target, Transform::Identity());
+  ASSERT_TRUE(r.converged);
+  EXPECT_NEAR(r.T_target_source.translation().z(), -0.002, 0.0005);
+}
+
 TEST(Icp, GridAndTreeCorrespondencesBothRecoverAKnownPose) {
   std::vector<Eigen::Vector3f> points, normals;
   box_surface(points, normals);

@@ -223,18 +223,37 @@ TEST(Recognize, WhatTheDatabaseStoresPreparedGivesWhatTheRecognizerWouldPrepare)
     o.nearest_cells.clear();
     o.drawn_mesh = {};
   }
+  // The defaults the database's data is made with are the recognizer's, so that it is used.
+  EXPECT_EQ(DatabaseParams{}.drawn_mesh_error_m, RecognizerOptions{}.verify_mesh_error_m);
+  EXPECT_EQ(DatabaseParams{}.grid_cell_m, IcpOptions{}.grid_cell_m);
+  EXPECT_EQ(DatabaseParams{}.grid_margin_m, IcpOptions{}.reach_m());
   RecognizerOptions lazy;
   lazy.run.prepare_objects_up_to = 0;
-  const Recognizer stored(room_db()), made(bare, lazy);
-  std::size_t detections = 0, frames = 0;
+  // Other ICP cells and drawing error than the database's: its data is not used, and not refused.
+  RecognizerOptions other;
+  other.icp.grid_cell_m = 0.004f;
+  other.verify_mesh_error_m = 0.003f;
+  // ... and a stored grid that is wrong (every cell holding the model's first point) and a drawing
+  // mesh of one triangle: were the stored data not what the recognizer uses, nothing would change.
+  ViewDatabase wrong = room_db();
+  for (DatabaseObject& o : wrong.objects) {
+    std::fill(o.nearest_cells.begin(), o.nearest_cells.end(), 1u);
+    o.drawn_mesh.triangles.resize(1);
+  }
+  const Recognizer stored(room_db()), made(bare, lazy), stored_other(room_db(), other), made_other(bare, other),
+      misled(wrong);
+  std::size_t detections = 0, frames = 0, misled_detections = 0;
   for (const Frame& frame : room_frames()) {
     SCOPED_TRACE(frames++);
     const Recognition a = made.recognize(frame);
     const Recognition b = stored.recognize(frame);
     detections += b.detections.size();
     expect_same_recognition(a, b);
+    expect_same_recognition(made_other.recognize(frame), stored_other.recognize(frame));
+    misled_detections += misled.recognize(frame).detections.size();
   }
   EXPECT_GT(detections, 0u);
+  EXPECT_EQ(misled_detections, 0u) << "the stored grid and drawing mesh are the ones used";
 }
 
 TEST(Recognize, NoisySeedExperimentSubsetMeetsAddSWithoutFalsePositives) {

@@ -35,6 +35,9 @@ class NearestGrid {
   /// (the largest size_t where there would be more than the constructors allow).
   static std::size_t cell_count(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m);
   static constexpr double kMaxCells = 2e8;  ///< the constructors refuse grids of more (800 MB)
+  /// Whether `cells` are a grid of these points, cell and margin, as the constructor above takes
+  /// them: cell_count() of them, each 0 or a point's index + 1.
+  static bool fits(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m, std::span<const std::uint32_t> cells);
 
   /// The point held by the query's cell and its squared distance to the query; false outside the grid.
   bool nearest(const Eigen::Vector3f& query, std::uint32_t& index, float& squared_distance) const {
@@ -85,5 +88,9 @@ class NearestGrid {
   std::uint32_t nx_ = 0, ny_ = 0, nz_ = 0;
   std::unique_ptr<std::atomic<std::uint32_t>[], FreeDeleter> cells_;  // 0: not filled yet; else index + 1
 };
+
+/// The cells of a grid over `points` with every cell filled (NearestGrid::cells() after fill_all()),
+/// on all threads: what a view database stores for each object.
+std::vector<std::uint32_t> filled_nearest_cells(std::span<const Eigen::Vector3f> points, float cell_m, float margin_m);
 
 }  // namespace viewpose

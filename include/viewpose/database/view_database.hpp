@@ -61,8 +61,9 @@ struct DatabaseParams {
   float drawn_mesh_error_m = 0.002f;  ///< RecognizerOptions::verify_mesh_error_m
   float grid_cell_m = 0.003f;         ///< IcpOptions::grid_cell_m
   float grid_margin_m = 0.04f;        ///< IcpOptions::reach_m()
-  /// Nearest-point grids are stored for the objects, in order, while their cells total at most this
-  /// many bytes (a few MB an object; a large database prepares the rest as scenes suggest them).
+  /// Nearest-point grids are stored for the objects, in order, each that still fits within this
+  /// many bytes of grids in all (a few MB an object; a large database prepares the rest as scenes
+  /// suggest them).
   std::size_t max_grid_bytes = std::size_t{256} << 20;
 };
 
@@ -104,6 +105,9 @@ PointCloud view_points(const DepthImage& depth, const CameraIntrinsics& K, float
 /// the cloud it was described from (points and normals, view camera frame).
 ViewEntry describe_view(const DepthImage& depth, const Transform& T_view_object, std::uint32_t object,
                         const DatabaseParams& params, PointCloud* described = nullptr);
+
+/// The bytes of the nearest-point grids `db` stores (DatabaseObject::nearest_cells).
+std::size_t stored_grid_bytes(const ViewDatabase& db);
 
 /// Makes an object's prepared data (DatabaseObject::drawn_mesh, nearest_cells) as `params` says;
 /// `grid_bytes_left` is what DatabaseParams::max_grid_bytes still allows, less what this grid takes.

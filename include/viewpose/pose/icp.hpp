@@ -57,9 +57,11 @@ struct IcpTarget {
   std::vector<Eigen::Vector3f> points;
   std::vector<Eigen::Vector3f> normals;
   KdTree tree;
-  /// The grid of `cell_m` cells reaching `margin_m` beyond the points; the first call's sizes stay,
-  /// and its `cells` if given (NearestGrid::cells() of the same grid, as a view database stores them).
-  const NearestGrid& grid(float cell_m, float margin_m, std::span<const std::uint32_t> cells = {}) const;
+  /// The grid of `cell_m` cells reaching `margin_m` beyond the points, made on the first call with
+  /// cell_m > 0, whose sizes stay, and its `cells` if given (NearestGrid::cells() of the same grid,
+  /// as a view database stores them). Null for cell_m 0, or where the grid would hold more than
+  /// NearestGrid::kMaxCells (a scan metres across): look-ups then search the k-d tree.
+  const NearestGrid* grid(float cell_m, float margin_m, std::span<const std::uint32_t> cells = {}) const;
   /// Each point beside its normal, in one cache line: ICP reads both for every correspondence, at
   /// random places in the model, and two lines a look-up were a third of its time.
   struct alignas(32) Surfel {

@@ -173,10 +173,11 @@ struct RunOptions {
   /// threads), so that the first frames run as fast as the rest; larger ones object by object as
   /// scenes suggest them. Either way the results are the same.
   std::size_t prepare_objects_up_to = 16;
-  /// Those objects' nearest-point grids that the database does not store (DatabaseParams::
-  /// max_grid_bytes, scanned objects) are filled whole then too (about 0.1 s an object); false:
-  /// they fill where ICP looks (the first hypotheses of an object cost a few milliseconds more),
-  /// which is sooner for a process that recognizes one frame.
+  /// Those objects' nearest-point grids that the database does not store (past DatabaseParams::
+  /// max_grid_bytes, or made with other cells than IcpOptions::grid_cell_m and reach_m()) are
+  /// filled whole then too (about 0.1 s an object); false: they fill where ICP looks (the first
+  /// hypotheses of an object cost a few milliseconds more), which is sooner for a process that
+  /// recognizes one frame.
   bool fill_grids_at_start = true;
 };
 
@@ -357,8 +358,10 @@ class Recognizer {
                                          const std::vector<std::vector<Transform>>* refused = nullptr) const;
   // `T_camera_object` turned half a turn about each of `object`'s axes, as hypotheses of it.
   std::vector<Hypothesis> half_turns(const Transform& T_camera_object, std::uint32_t object) const;
-  // What ICP and verification need of an object, made on its first hypothesis: a database of a
-  // thousand objects costs nothing for the objects a scene never suggests.
+  // What ICP and verification need of an object, made when the recognizer is (small databases,
+  // RunOptions::prepare_objects_up_to) or on its first hypothesis: a database of a thousand objects
+  // costs nothing for the objects a scene never suggests. The drawing mesh and the grid's cells are
+  // taken from the database where it stores them for these options.
   struct PreparedObject {
     std::once_flag once;
     std::unique_ptr<IcpTarget> target;
