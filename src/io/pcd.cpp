@@ -64,13 +64,14 @@ double read_scalar(const std::uint8_t* p, const PcdField& f) {
 
 // Packed colour: PCL stores rgb as the bits of a float, rgba as an unsigned int; both are the same
 // 32 bits.
-std::uint32_t read_bits32(const std::uint8_t* p, const PcdField& f) {
-  if (f.size == 4) { std::uint32_t v; std::memcpy(&v, p, 4); return v; }
-  return static_cast<std::uint32_t>(read_scalar(p, f));
-}
-
 std::uint32_t to_u32(double v) {
   return (std::isfinite(v) && v >= 0 && v <= 4294967295.0) ? static_cast<std::uint32_t>(v) : 0u;
+}
+
+// (A colour field of another size is read as a number; one past 32 bits, as the fuzzer once gave, is 0.)
+std::uint32_t read_bits32(const std::uint8_t* p, const PcdField& f) {
+  if (f.size == 4) { std::uint32_t v; std::memcpy(&v, p, 4); return v; }
+  return to_u32(read_scalar(p, f));
 }
 
 Layout make_layout(const PcdHeader& h, std::string_view name) {
