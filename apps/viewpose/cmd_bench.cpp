@@ -25,6 +25,7 @@
 
 #include "camera_flags.hpp"
 #include "commands.hpp"
+#include "process_memory.hpp"
 #include "progress.hpp"
 #include "scene_input.hpp"
 #include "viewpose/core/error.hpp"
@@ -315,6 +316,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                thread_count() == 1 ? "" : "s", o->load > 0 ? fmt::format(", {} busy processes beside", o->load) : std::string(),
                db.objects.size(), db.views.size());
     fmt::print("OpenMP waits: {}\n", openmp_wait());
+    fmt::print("malloc: GLIBC_TUNABLES {}\n", malloc_tunables());
     if (db_build_ms > 0) fmt::print("database build: {:.0f} ms\n", db_build_ms);
     if (db_load_ms > 0) fmt::print("database loaded in {:.1f} ms\n", db_load_ms);
     fmt::print("recognizer made in {:.0f} ms\n", prepare_ms);
@@ -349,7 +351,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
     const double rss = peak_rss_mib();
     fmt::print("peak resident memory: {:.0f} MiB\n", rss);
     if (!o->json.empty()) {
-      const nlohmann::json j = {{"source", source}, {"frames", runs}, {"distinct_frames", frames.size()}, {"blocks", blocks}, {"threads", thread_count()}, {"openmp_wait", openmp_wait()},
+      const nlohmann::json j = {{"source", source}, {"frames", runs}, {"distinct_frames", frames.size()}, {"blocks", blocks}, {"threads", thread_count()}, {"openmp_wait", openmp_wait()}, {"glibc_tunables", malloc_tunables()},
                                 {"objects", db.objects.size()}, {"views", db.views.size()},
                                 {"db_build_ms", db_build_ms}, {"db_load_ms", db_load_ms}, {"prepare_ms", prepare_ms}, {"load_processes", o->load}, {"detections", detections}, {"stages_ms", jstages}, {"fps", fps},
                                 {"hypotheses_median", hyp_med}, {"repeats_median", repeats_med}, {"icp_verify_per_hypothesis_ms", per_hyp}, {"match_per_cluster_ms", match_per_region},

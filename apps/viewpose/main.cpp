@@ -10,10 +10,12 @@
 #include <spdlog/spdlog.h>
 
 #include "commands.hpp"
+#include "process_memory.hpp"
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/threads.hpp"
 
 int main(int argc, char** argv) {
+  viewpose::cli::keep_freed_memory();
   // Messages go to stderr so that stdout carries only results.
   // A write past the file-size limit (ulimit -f) fails with EFBIG, reported like a full disk, instead
   // of killing the process half way through.

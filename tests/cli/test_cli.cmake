@@ -23,7 +23,7 @@ endfunction()
 run(TRUE --version)
 expect_in("${OUT}" "0.")
 
-# The command gives OpenMP a short spin before idle threads sleep (apps/viewpose/openmp_wait.cpp), as
+# The command gives OpenMP a short spin before idle threads sleep (apps/viewpose/start_environment.cpp), as
 # libgomp itself reports it; a user's own choice is kept. libgomp (GCC's runtime, the Release build)
 # reports its settings as it starts; clang's libomp (the sanitizer builds) only at its first parallel
 # region, and ignores GOMP_SPINCOUNT: there the bench JSON below checks the environment alone.
@@ -297,6 +297,21 @@ endif()
 string(JSON bench_wait GET "${bench_json}" openmp_wait)
 if(NOT bench_wait STREQUAL "GOMP_SPINCOUNT=1000")
   message(FATAL_ERROR "bench ran with OpenMP waits '${bench_wait}', not the command's GOMP_SPINCOUNT=1000")
+endif()
+# ... and malloc large pages (start_environment.cpp), unless the user set glibc's tunables, and then
+# with theirs, the OpenMP spin still added.
+string(JSON bench_tunables GET "${bench_json}" glibc_tunables)
+if(NOT bench_tunables STREQUAL "glibc.malloc.hugetlb=1")
+  message(FATAL_ERROR "bench ran with GLIBC_TUNABLES '${bench_tunables}', not the command's glibc.malloc.hugetlb=1")
+endif()
+set(ENV{GLIBC_TUNABLES} "glibc.malloc.check=0")
+run(TRUE bench --frames 1 --threads 1 --json "${WORK}/bench_user.json")
+unset(ENV{GLIBC_TUNABLES})
+file(READ "${WORK}/bench_user.json" bench_json)
+string(JSON bench_tunables GET "${bench_json}" glibc_tunables)
+string(JSON bench_wait GET "${bench_json}" openmp_wait)
+if(NOT bench_tunables STREQUAL "glibc.malloc.check=0" OR NOT bench_wait STREQUAL "GOMP_SPINCOUNT=1000")
+  message(FATAL_ERROR "with the user's GLIBC_TUNABLES: '${bench_tunables}', '${bench_wait}'")
 endif()
 run(TRUE bench --dataset "${WORK}/sim" --db "${WORK}/jug.vpdb" --frames 3)
 expect_in("${OUT}" "(test, 3 images): 3 frames")
