@@ -76,8 +76,9 @@ bench: build
 bench-pcl: deps
 	@scripts/install-deps.sh pcl
 	@cmake -S . -B build-pcl-bench -DCMAKE_BUILD_TYPE=Release -DVIEWPOSE_PCL_BENCH=ON -DVIEWPOSE_TESTS=OFF -DVIEWPOSE_BENCH=OFF >/dev/null
-	@cmake --build build-pcl-bench -j $(JOBS) --target viewpose_pcl_bench
+	@cmake --build build-pcl-bench -j $(JOBS) --target viewpose_pcl_bench viewpose_cli
 	@./build-pcl-bench/viewpose_pcl_bench --frames $(PCL_FRAMES) --json docs/results/pcl_side_by_side.json
+	@scripts/bench-pcl-real.sh build-pcl-bench docs/results/pcl_side_by_side.json
 
 # The thesis's experiment and the real-data check, end to end: writes docs/RESULTS.md and its plots.
 results: build

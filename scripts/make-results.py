@@ -215,6 +215,17 @@ def write_speed(w, speed):
             ratios[row["stage"]] = row["ratio"]
             w(f"| {row['stage']} | {row['pcl_ms']:.2f} | {row['viewpose_ms']:.3f} | {row['ratio']:.0f}x |")
         w("")
+        real = pcl.get("real_frames")
+        if real:
+            w("Real frames, each once through both pipelines in the same process (`scripts/bench-pcl-real.sh`; PCL refining")
+            w("and verifying as many poses as viewpose did in that frame, at least 10):\n")
+            w("| frame | database | PCL 1.13 (ms) | viewpose (ms) | ratio | PCL clusters, hypotheses | viewpose regions, hypotheses, detections |")
+            w("|---|---|---|---|---|---|---|")
+            for db, rows in real.items():
+                for r in rows:
+                    w(f"| {Path(r['scene']).name} | {Path(db).stem} | {r['pcl_ms']:.0f} | {r['viewpose_ms']:.1f} | {r['ratio']:.0f}x | "
+                      f"{r['pcl_clusters']}, {r['pcl_hypotheses']} | {r['viewpose_regions']}, {r['viewpose_hypotheses']}, {r['viewpose_detections']} |")
+            w("")
     w("### Targets of issue 7\n")
     w("| target | measured | met |")
     w("|---|---|---|")
