@@ -19,10 +19,15 @@ mkdir -p "$W"
 V=$B/viewpose
 P=$B/viewpose_pcl_bench
 [ -f "$W/milk.vpdb" ] || $V db add-view "$D/pcl_kinect/milk.pcd" --object milk --db "$W/milk.vpdb" > /dev/null
-# The eight HOPE objects make results uses against mOSD (scripts/results_real.py, HOPE_NEGATIVES).
+# The eight HOPE objects make results uses against mOSD: one list, scripts/results_real.py's HOPE_NEGATIVES.
 H=$D/hope_models
-[ -f "$W/hope8.vpdb" ] || $V db build "$H/obj_000001.ply" "$H/obj_000002.ply" "$H/obj_000006.ply" "$H/obj_000011.ply" \
-  "$H/obj_000013.ply" "$H/obj_000014.ply" "$H/obj_000016.ply" "$H/obj_000017.ply" --unit mm -o "$W/hope8.vpdb" > /dev/null
+HOPE_FILES=$(python3 -c 'import sys; sys.path.insert(0, "scripts"); from results_real import HOPE_NEGATIVES as n
+print(" ".join(f"obj_{i:06d}.ply" for i in n))')
+if [ ! -f "$W/hope8.vpdb" ]; then
+  hope=()
+  for f in $HOPE_FILES; do hope+=("$H/$f"); done
+  $V db build "${hope[@]}" --unit mm -o "$W/hope8.vpdb" > /dev/null
+fi
 [ -f "$W/ycbv_dev.vpdb" ] || $V db build --bop-models "$D/ycbv_real_dev/models" --unit mm -o "$W/ycbv_dev.vpdb" > /dev/null
 $P --db "$W/milk.vpdb" --scene "$D/pcl_kinect/milk_cartoon_all_small_clorox.pcd" --json "$J"
 $P --db "$W/hope8.vpdb" --scene "$D/pcl_mosd/test/test0.pcd" --scene "$D/pcl_mosd/test/test25.pcd" --scene "$D/pcl_mosd/test/test55.pcd" --json "$J"

@@ -6,11 +6,9 @@
 // megabytes, one after another, so every one of them came as fresh pages, each a page fault when
 // first written, which on a virtual machine costs microseconds (start_environment.cpp). Here freed
 // blocks stay for reuse, and the heap grows 64 MB at a time, so that the large pages asked for
-// there (GLIBC_TUNABLES=glibc.malloc.hugetlb=1) can back it. Measured with `perf stat` on this
-// project's 2-core VM, the thresholds alone took the PCL milk scene's process from 125 to 99 ms; with
-// the large pages, to 65 ms (a YCB-V frame against seven objects 258 -> 115 ms). Blocks over 32 MB
-// (grids of large scans, filled lazily, which rely on untouched pages costing nothing) are still
-// mapped apart. A long run (`bench`, `live`) is unchanged per frame.
+// there (GLIBC_TUNABLES=glibc.malloc.hugetlb=1) can back it (docs/BENCHMARK.md, "Page faults", has
+// what that saves, measured). Blocks over 32 MB (grids of large scans, filled lazily, which rely on
+// untouched pages costing nothing) are still mapped apart. A long run (`bench`, `live`) is unchanged per frame.
 #include "process_memory.hpp"
 
 #include <cstdlib>

@@ -9,11 +9,11 @@
 //
 // Every page of memory a process touches first is a page fault, and on a virtual machine a fault
 // costs microseconds: a run of one frame touches tens of megabytes (the database, the scene, the
-// frame's clouds), and on this project's 2-core VM its 8,700-12,000 faults were a third to a half of
+// frame's clouds), and on this project's 2-core VM those faults were a third to a half of
 // `viewpose recognize`'s process time. glibc's malloc can ask for transparent huge pages (2 MB, one
 // fault where there were 512) for its heaps: GLIBC_TUNABLES=glibc.malloc.hugetlb=1, which with the
-// heap grown 64 MB at a time (process_memory.cpp) took the PCL milk scene's process from 107 to 65 ms
-// and a YCB-V frame's against seven objects from 211 to 115 ms, for 3 MB more resident memory.
+// heap grown 64 MB at a time (process_memory.cpp) halves the process time of one frame, for 3 MB more
+// resident memory (docs/BENCHMARK.md, "Page faults", has the measurements).
 // (Where the system does not offer huge pages, the setting does nothing.)
 //
 // libgomp and glibc read these once, before main, from the environment the process started with: a
