@@ -255,6 +255,7 @@ std::string hypotheses_json(const std::vector<VerifiedHypothesis>& heard, const 
     for (std::size_t k = 0; k < f.size(); ++k) features[std::string(confidence_feature_names()[k])] = f[k];
     nlohmann::ordered_json line = {{"scene_id", im.scene_id}, {"im_id", im.im_id}, {"obj_id", object.id},
                            {"confidence", h.confidence}, {"fit_score", h.verification.score}, {"features", features},
+                           {"verification", verification_json(h.verification)},
                            {"add_s_rel", add_s ? nlohmann::ordered_json(*add_s) : nlohmann::ordered_json(nullptr)}, {"gt_visib", visib}};
     lines += line.dump() + "\n";
   }

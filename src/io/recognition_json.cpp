@@ -2,6 +2,23 @@
 
 namespace viewpose {
 
+nlohmann::json verification_json(const Verification& v) {
+  return {{"fit_score", v.score},
+          {"inlier_fraction", v.inlier_fraction},
+          {"conflict_fraction", v.conflict_fraction},
+          {"cluster_explained", v.cluster_explained},
+          {"model_support", v.model_support},
+          {"visible_fraction", v.visible_fraction},
+          {"unmeasured_fraction", v.unmeasured_fraction},
+          {"mean_depth_m", v.mean_depth_m},
+          {"inliers", v.inliers},
+          {"outline_continuation", v.outline_continuation},
+          {"outline", {{"continued", v.outline_continued}, {"stepped", v.outline_stepped}, {"in_front", v.outline_in_front}, {"unknown", v.outline_unknown}}},
+          {"model_rms_m", v.model_rms_m},
+          {"plane_rms_m", v.plane_rms_m},
+          {"model_relief_m", v.model_relief_m}};
+}
+
 nlohmann::json recognition_json(const Recognition& r, bool with_times) {
   nlohmann::json dets = nlohmann::json::array();
   for (const Detection& d : r.detections) {
@@ -13,22 +30,7 @@ nlohmann::json recognition_json(const Recognition& r, bool with_times) {
                     {"icp_rmse_m", d.icp_rmse_m}, {"match_rank", d.match_rank}, {"roll_deg", d.roll_deg},
                     {"cluster_points", d.cluster_points}, {"from_split_cluster", d.from_split_cluster},
                     {"runner_up_score", d.runner_up_score},
-                    {"verification", {{"fit_score", d.verification.score},
-                                      {"inlier_fraction", d.verification.inlier_fraction},
-                                      {"conflict_fraction", d.verification.conflict_fraction},
-                                      {"cluster_explained", d.verification.cluster_explained},
-                                      {"model_support", d.verification.model_support},
-                                      {"visible_fraction", d.verification.visible_fraction},
-                                      {"unmeasured_fraction", d.verification.unmeasured_fraction},
-                                      {"mean_depth_m", d.verification.mean_depth_m},
-                                      {"outline_continuation", d.verification.outline_continuation},
-                                      {"outline", {{"continued", d.verification.outline_continued},
-                                                   {"stepped", d.verification.outline_stepped},
-                                                   {"in_front", d.verification.outline_in_front},
-                                                   {"unknown", d.verification.outline_unknown}}},
-                                      {"model_rms_m", d.verification.model_rms_m},
-                                      {"plane_rms_m", d.verification.plane_rms_m},
-                                      {"model_relief_m", d.verification.model_relief_m}}}});
+                    {"verification", verification_json(d.verification)}});
   }
   nlohmann::json j = {{"detections", dets}, {"cut_short", r.cut_short}, {"clusters", r.clusters},
                       {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses}, {"repeats", r.repeats}, {"screened", r.screened},

@@ -11,4 +11,7 @@ namespace viewpose {
 
 nlohmann::json recognition_json(const Recognition& r, bool with_times = true);
 
+/// One pose's verification evidence (a detection's "verification" above, and each line of `bop --hypotheses`).
+nlohmann::json verification_json(const Verification& v);
+
 }  // namespace viewpose
