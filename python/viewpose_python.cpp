@@ -186,8 +186,13 @@ PYBIND11_MODULE(viewpose, m) {
 
   py::class_<Recognizer>(m, "Recognizer", "Recognizes the database's objects in depth frames")
       .def(py::init([](std::shared_ptr<ViewDatabase> db, bool keep_best, bool split_touching, std::size_t matches,
-                       std::size_t budget, std::size_t screen, double deadline_ms, std::optional<double> min_score) {
+                       std::size_t budget, std::size_t screen, const std::string& source, double deadline_ms,
+                       std::optional<double> min_score) {
              RecognizerOptions o;
+             if (source == "vfh") o.match.source = PoseSource::vfh;
+             else if (source == "ppf") o.match.source = PoseSource::ppf;
+             else if (source == "both") o.match.source = PoseSource::both;
+             else throw py::value_error("source: \"" + source + "\" is none of vfh, ppf, both");
              o.accept.keep_best = keep_best;
              o.split.enabled = split_touching;
              o.match.per_object = matches;
@@ -200,9 +205,10 @@ PYBIND11_MODULE(viewpose, m) {
            py::arg("db"), py::kw_only(), py::arg("keep_best") = false, py::arg("split_touching") = true,
            py::arg("matches") = RecognizerOptions{}.match.per_object,
            py::arg("budget") = RecognizerOptions{}.match.max_hypotheses, py::arg("screen") = RecognizerOptions{}.match.prescreen,
-           py::arg("deadline_ms") = 0.0, py::arg("min_score") = py::none(),
+           py::arg("source") = "vfh", py::arg("deadline_ms") = 0.0, py::arg("min_score") = py::none(),
            "Options as `viewpose recognize` has them: keep_best, split_touching (--no-split is False), matches, "
-           "budget (0: every starting pose), screen (0: coarse fit order only), deadline_ms (0: none), min_score "
+           "budget (0: every starting pose), screen (0: coarse fit order only), source (\"vfh\", \"ppf\" or \"both\": where "
+           "starting poses come from, --source), deadline_ms (0: none), min_score "
            "(None: the default threshold)")
       .def(
           "recognize",

@@ -49,6 +49,7 @@ struct RecognizeFlags {
   std::size_t matches = 20;
   std::size_t budget = RecognizerOptions{}.match.max_hypotheses;
   std::size_t screen = RecognizerOptions{}.match.prescreen;
+  std::string source = "vfh";
   double deadline_ms = 0;
   double min_score = -1;  // < 0: the recognizer's default
   bool no_times = false;
@@ -67,6 +68,12 @@ struct RecognizeFlags {
                    "Starting poses per cluster screened by a short ICP, which orders them for --budget by where they "
                    "lead (the first few are tried in coarse fit order before it; 0: coarse fit order only)")
         ->check(CLI::Range(0, 1000000))
+        ->capture_default_str();
+    cmd.add_option("--source", source,
+                   "Where starting poses come from: vfh (each cluster's nearest database views, as the thesis), ppf "
+                   "(point pair feature votes over the cluster: touching and half-hidden objects; about 20 ms per "
+                   "object and cluster more) or both, ranked together")
+        ->check(CLI::IsMember({"vfh", "ppf", "both"}))
         ->capture_default_str();
     cmd.add_option("--deadline-ms", deadline_ms,
                    "Stop trying poses after this long per frame and report what is verified, marked cut short (0: no limit)")
@@ -87,6 +94,7 @@ struct RecognizeFlags {
     o.match.per_object = matches;
     o.match.max_hypotheses = budget;
     o.match.prescreen = screen;
+    o.match.source = source == "ppf" ? PoseSource::ppf : source == "both" ? PoseSource::both : PoseSource::vfh;
     o.run.deadline_ms = deadline_ms;
     if (min_score >= 0) o.accept.min_confidence = min_score;
     return o;

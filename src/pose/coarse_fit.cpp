@@ -1,6 +1,7 @@
 #include "viewpose/pose/coarse_fit.hpp"
 
 #include <algorithm>
+#include <vector>
 
 namespace viewpose {
 
@@ -25,6 +26,21 @@ double coarse_fit(const CoarseFitInputs& in, const Transform& T_camera_view, con
   const double region_on_model = overlap(in.region_points, T_camera_object.inverse(), *in.model_grid, max_points);
   const double view_on_region = overlap(in.view_points, T_camera_view, *in.region_grid, max_points);
   return std::min(region_on_model, view_on_region);
+}
+
+double coarse_fit_facing(std::span<const Eigen::Vector3f> region_points, const OccupancyGrid& region_grid,
+                         std::span<const Eigen::Vector3f> model_points, std::span<const Eigen::Vector3f> model_normals,
+                         const OccupancyGrid& model_grid, const Transform& T_camera_object, std::size_t max_points) {
+  const Eigen::Matrix3f R = T_camera_object.linear().cast<float>();
+  const Eigen::Vector3f t = T_camera_object.translation().cast<float>();
+  std::vector<Eigen::Vector3f> facing;  // object frame
+  for (std::size_t i = 0; i < model_points.size() && i < model_normals.size(); ++i) {
+    if ((R * model_normals[i]).dot(R * model_points[i] + t) < 0) facing.push_back(model_points[i]);
+  }
+  if (facing.empty()) return 0;
+  const double region_on_model = overlap(region_points, T_camera_object.inverse(), model_grid, max_points);
+  const double model_on_region = overlap(facing, T_camera_object, region_grid, max_points);
+  return std::min(region_on_model, model_on_region);
 }
 
 }  // namespace viewpose

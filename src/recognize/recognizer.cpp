@@ -55,6 +55,18 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
       }
     }
     if (failed) std::rethrow_exception(failed);
+    if (options_.match.source != PoseSource::vfh) {
+#pragma omp parallel for schedule(dynamic, 1)
+      for (std::ptrdiff_t o = 0; o < objects; ++o) {
+        try {
+          pair_table(static_cast<std::uint32_t>(o));
+        } catch (...) {
+          const std::lock_guard lock(failed_mutex);
+          if (!failed) failed = std::current_exception();
+        }
+      }
+      if (failed) std::rethrow_exception(failed);
+    }
     for (std::uint32_t o = 0; o < db.objects.size() && options_.run.fill_grids_at_start; ++o) {
       if (const NearestGrid* grid = icp_target(o).grid(options_.icp.grid_cell_m, options_.icp.reach_m())) grid->fill_all();  // (nothing to do where stored)
     }
@@ -99,6 +111,15 @@ const Recognizer::PreparedObject& Recognizer::prepared(std::uint32_t object) con
     p.closed_winding = closed_mesh_winding(p.drawn);
   });
   return p;
+}
+
+const PpfModel& Recognizer::pair_table(std::uint32_t object) const {
+  PreparedObject& p = *prepared_[object];
+  std::call_once(p.ppf_once, [&] {
+    const DatabaseObject& o = db_.objects[object];
+    p.ppf = std::make_unique<PpfModel>(o.model_points, o.model_normals, o.diameter_m, options_.match.ppf);
+  });
+  return *p.ppf;
 }
 
 VerifyModel Recognizer::verify_model(std::uint32_t object) const {
@@ -209,8 +230,9 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
     if (z / static_cast<double>(points.size()) > options_.verify.max_depth_m) return;
   }
   const double size = bounding_box(points.points).diagonal();
+  std::optional<Detection> partial;  // a pose that explains part of the region well (joint_min_cluster_explained)
   if (size <= options_.match.max_region_size_factor * largest_diameter_m_) {
-    if (std::optional<Detection> det = recognize_cluster(points, frame, depth > 0 ? part_verify : options_.verify, out)) {
+    if (std::optional<Detection> det = recognize_cluster(points, frame, depth > 0 ? part_verify : options_.verify, out, &partial)) {
       det->from_split_cluster = depth > 0;
       recognize_rest(points, std::move(*det), frame, out, depth);
       return;
@@ -220,6 +242,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   // first. Two objects side by side span at most twice the largest object.
   if (!options_.split.enabled || depth >= options_.split.max_depth ||
       size > options_.split.max_size_factor * largest_diameter_m_ || out_of_time(out)) {
+    if (partial && options_.split.enabled && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out);
     return;
   }
   auto t = Clock::now();
@@ -236,10 +259,55 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
     if (bounding_box(part_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
     if (std::optional<Region> region = describe_region(part_points, frame, part_verify, out)) regions.push_back(std::move(*region));
   }
-  std::optional<Detection> det = search(regions, frame, out);
-  if (!det) return;
+  std::optional<Detection> part_partial;
+  std::optional<Detection> det = search(regions, frame, out, &part_partial);
+  if (!det) {
+    // No part passed alone: a pose that explains part of the region (or of a part) well, and
+    // whatever the rest of the region is.
+    if (!partial || (part_partial && part_partial->verification.score > partial->verification.score)) partial = std::move(part_partial);
+    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out);
+    return;
+  }
   det->from_split_cluster = true;
   recognize_rest(points, std::move(*det), frame, out, depth);
+}
+
+bool Recognizer::explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,
+                                 Recognition& out) const {
+  const auto t = Clock::now();
+  const std::vector<char> explained = explained_points(partial, points);
+  std::vector<std::uint32_t> rest;
+  for (std::uint32_t i = 0; i < points.size(); ++i) {
+    if (!explained[i]) rest.push_back(i);
+  }
+  const std::vector<Cluster> rest_clusters = euclidean_clusters(points, rest, options_.segment.clusters);
+  out.times.split_ms += ms_since(t);
+  for (const Cluster& c : rest_clusters) {
+    if (out_of_time(out)) return false;
+    const PointCloud rest_points = cluster_points(points, c);
+    if (bounding_box(rest_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
+    std::optional<Detection> other = recognize_cluster(rest_points, frame, verify, out);
+    if (!other) continue;
+    // The kept pose on what the other leaves of the region: its own share, judged as a part.
+    const auto tv = Clock::now();
+    const std::vector<char> taken = explained_points(*other, points);
+    PointCloud own;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (!taken[i]) own.points.push_back(points.points[i]);
+    }
+    const Verification v = verify_pose(verify_model(partial.object_index), partial.T_camera_object, frame.depth, frame.K, own.points, verify);
+    out.times.verify_ms += ms_since(tv);
+    const double confidence = v.accepted ? pose_confidence(v) : 0.0;
+    if (!v.accepted || confidence < options_.accept.min_confidence) continue;
+    Detection first = partial;
+    first.verification = v;
+    first.score = confidence;
+    first.from_split_cluster = other->from_split_cluster = true;
+    out.detections.push_back(std::move(first));
+    out.detections.push_back(std::move(*other));
+    return true;
+  }
+  return false;
 }
 
 void Recognizer::recognize_rest(const PointCloud& points, Detection detection, const Frame& frame, Recognition& out,
@@ -358,7 +426,7 @@ std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& 
   if (d.cloud.size() < 3) return std::nullopt;
   ++out.regions;
   const auto t_match = Clock::now();
-  region.matches = index_.nearest(d.vfh, options_.match.per_object, options_.match.at_most);
+  if (options_.match.source != PoseSource::ppf) region.matches = index_.nearest(d.vfh, options_.match.per_object, options_.match.at_most);
   out.times.match_ms += ms_since(t_match);
   region.icp_source = voxel_downsample(d.cloud, db_.params.icp_voxel_m).points;
   // Where the sensor's pixels lie farther apart than the ICP copy's voxels, the region holds fewer
@@ -379,6 +447,8 @@ std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& 
     const double slack = 2.0 * (depth_tolerance(z_far, verify) + 4.0 * z_far / frame.K.fx);
     region.smallest_diameter = core_width(d.cloud.points, verify.min_cluster_explained) - slack;
   }
+  region.partial = verify;
+  region.partial.min_cluster_explained = std::min(verify.min_cluster_explained, options_.split.joint_min_cluster_explained);
   region.near_miss.max_conflict_fraction = std::max(verify.max_conflict_fraction, options_.accept.near_miss_conflict_fraction);
   region.try_near_misses = options_.accept.try_half_turns && region.near_miss.max_conflict_fraction > verify.max_conflict_fraction;
   region.candidates = rank_candidates(region, out);
@@ -443,10 +513,39 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
     const CoarseFitInputs in{region.icp_source, &region_grid, view.icp_points, &prepared(c.object).occupancy};
     c.fit = coarse_fit(in, c.T_camera_object * view.T_view_object.inverse(), c.T_camera_object, options_.match.fit_points);
   }
+  if (options_.match.source != PoseSource::vfh) {
+    for (Candidate& c : pair_vote_candidates(region, region_grid)) candidates.push_back(c);
+  }
   // Best fit first; equal fits keep the order of the views' VFH distance and their rolls' peaks.
   std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.fit > b.fit; });
   out.times.match_ms += ms_since(t1);
   return candidates;
+}
+
+std::vector<Recognizer::Candidate> Recognizer::pair_vote_candidates(const Region& region, const OccupancyGrid& region_grid) const {
+  const Description& d = region.description;
+  const auto objects = static_cast<std::ptrdiff_t>(db_.objects.size());
+  std::vector<std::vector<Candidate>> by_object(db_.objects.size());
+  for (std::uint32_t o = 0; o < db_.objects.size(); ++o) {
+    if (db_.objects[o].diameter_m >= region.smallest_diameter) prepared(o), pair_table(o);  // (each once, before the threads)
+  }
+#pragma omp parallel for schedule(dynamic, 1) if (options_.run.parallel_hypotheses && objects > 1)
+  for (std::ptrdiff_t k = 0; k < objects; ++k) {
+    const auto o = static_cast<std::uint32_t>(k);
+    const DatabaseObject& object = db_.objects[o];
+    if (object.diameter_m < region.smallest_diameter) continue;
+    const PpfModel& table = pair_table(o);
+    // The region sampled as the object's table was, at its own step (a share of its diameter).
+    const OrientedPoints scene = ppf_sample(d.cloud.points, d.cloud.normals, table.sample_step_m(), table.options().normal_split_deg);
+    for (const PpfHypothesis& h : table.hypotheses(scene)) {
+      const double fit = coarse_fit_facing(region.icp_source, region_grid, table.sampled().points, table.sampled().normals,
+                                           prepared(o).occupancy, h.T_camera_object, options_.match.fit_points);
+      by_object[o].push_back({Candidate::kFromPairVotes, o, 0.0f, h.T_camera_object, fit});
+    }
+  }
+  std::vector<Candidate> all;
+  for (const std::vector<Candidate>& c : by_object) all.insert(all.end(), c.begin(), c.end());
+  return all;
 }
 
 std::vector<Recognizer::Hypothesis> Recognizer::half_turns(const Transform& T_camera_object, std::uint32_t object) const {
@@ -471,7 +570,7 @@ Detection Recognizer::detection_from(const Refined& h, const Region& region, con
   det.score = h.confidence;
   det.icp_fitness = h.icp.fitness;
   det.icp_rmse_m = h.icp.inlier_rmse;
-  det.match_rank = static_cast<int>(c.match);
+  det.match_rank = c.match == Candidate::kFromPairVotes ? -1 : static_cast<int>(c.match);
   det.roll_deg = c.roll_deg;
   det.cluster_points = region.description.cloud.size();
   det.verification = h.v;
@@ -496,6 +595,11 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
     if (h.repeat) ++out.repeats;
     if (!h.verified) continue;
     if (!h.accepted) region.refused[c.object].push_back(h.T_camera_object);
+    if (!h.v.accepted && region.partial.min_cluster_explained > 0 && passes(h.v, region.partial) &&
+        (!region.best_partial || h.v.score > region.best_partial->verification.score)) {
+      region.best_partial = detection_from(h, region, c);
+      region.best_partial->score = pose_confidence(h.v);
+    }
     if (!h.v.accepted) {
       if (region.try_near_misses && passes(h.v, region.near_miss) && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
         nearest_miss = &h;
@@ -564,13 +668,15 @@ void Recognizer::turn_if_better(const Region& region, Detection& best, const Fra
 }
 
 std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points, const Frame& frame,
-                                                       const VerifyOptions& verify, Recognition& out) const {
+                                                       const VerifyOptions& verify, Recognition& out,
+                                                       std::optional<Detection>* partial) const {
   std::vector<Region> regions;
   if (std::optional<Region> region = describe_region(points, frame, verify, out)) regions.push_back(std::move(*region));
-  return search(regions, frame, out);
+  return search(regions, frame, out, partial);
 }
 
-std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const Frame& frame, Recognition& out) const {
+std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const Frame& frame, Recognition& out,
+                                            std::optional<Detection>* partial) const {
   // The starting poses of every region, best first across them (by the screen, else coarse fit), a
   // batch at a time from one region, until one passes or the budget is spent (with keep_best: all
   // of them, the best kept). The regions share the budget: the parts of one cluster compete for it.
@@ -607,7 +713,17 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
       best_region = r;
     }
   }
-  if (!best) return best;
+  if (!best) {
+    if (partial) {
+      for (const Region& region : regions) {
+        if (region.best_partial && (!*partial || region.best_partial->verification.score > (*partial)->verification.score)) *partial = region.best_partial;
+      }
+      if (*partial && options_.accept.canonical_poses) {
+        (*partial)->T_camera_object = canonical_pose((*partial)->T_camera_object, db_.objects[(*partial)->object_index].symmetries);
+      }
+    }
+    return best;
+  }
   const Region& region = regions[best_region];
   if (!options_.accept.keep_best && options_.match.challenger_views > 0) challenge(region, next[best_region], end[best_region], *best, frame, out);
   if (options_.accept.try_half_turns && !out_of_time(out)) turn_if_better(region, *best, frame, out);

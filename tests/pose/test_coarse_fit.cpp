@@ -111,5 +111,47 @@ TEST(CoarseFit, OverlapCountsHalvesForNeighbouringCellsAndReadsEvenlySpreadPoint
   EXPECT_DOUBLE_EQ(overlap(probes, Transform::Identity(), grid, 0), 0.0);
 }
 
+// A pose from point pair votes has no view: the model's points that face the camera stand in.
+TEST(CoarseFit, WithoutAViewTheModelsFacingPointsStandInForIt) {
+  const std::vector<Eigen::Vector3f> model = box_surface(false);
+  // Each point's outward normal: along the axis of the face it lies on (the largest share of its
+  // half size; points on edges take one of their faces).
+  const Eigen::Vector3f half(0.06f, 0.04f, 0.025f);
+  std::vector<Eigen::Vector3f> normals;
+  for (const Eigen::Vector3f& p : model) {
+    Eigen::Index axis = 0;
+    p.cwiseAbs().cwiseQuotient(half).maxCoeff(&axis);
+    Eigen::Vector3f n = Eigen::Vector3f::Zero();
+    n[axis] = p[axis] > 0 ? 1.0f : -1.0f;
+    normals.push_back(n);
+  }
+  const OccupancyGrid model_grid(model, 0.01f);
+  const Transform T_camera_object = make_transform(
+      (Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(2.5, Eigen::Vector3d(1, 1, 0).normalized())).toRotationMatrix(),
+      {0.04, -0.02, 0.7});
+  // The region: the points the camera sees (normal towards it), with 2 mm of noise.
+  std::vector<Eigen::Vector3f> seen;
+  for (std::size_t i = 0; i < model.size(); ++i) {
+    const Eigen::Vector3d p = T_camera_object * model[i].cast<double>();
+    if ((T_camera_object.linear() * normals[i].cast<double>()).dot(p) < 0) seen.push_back(model[i]);
+  }
+  ASSERT_GT(seen.size(), model.size() / 4);
+  ASSERT_LT(seen.size(), model.size() * 3 / 4);
+  const std::vector<Eigen::Vector3f> region = moved(seen, T_camera_object, 0.002f, 3);
+  const OccupancyGrid region_grid(region, 0.01f);
+  const auto fit = [&](const Transform& T) { return coarse_fit_facing(region, region_grid, model, normals, model_grid, T, 64); };
+  EXPECT_GT(fit(T_camera_object), 0.9);
+  // Five centimetres aside; turned a quarter turn about its long axis (the 5 and 8 cm sides swap).
+  EXPECT_LT(fit(make_transform(Eigen::Matrix3d::Identity(), {0.05, 0.0, 0.0}) * T_camera_object), 0.5);
+  const auto turned = [&](double angle, const Eigen::Vector3d& axis) {
+    return fit(T_camera_object * make_transform(Eigen::AngleAxisd(angle, axis).toRotationMatrix(), {0, 0, 0}));
+  };
+  EXPECT_LT(turned(std::numbers::pi / 2, Eigen::Vector3d::UnitX()), 0.7);
+  // Half a turn is the same box (a box's symmetry): it fits as well.
+  EXPECT_GT(turned(std::numbers::pi, Eigen::Vector3d::UnitX()), 0.9);
+  // No normals, no facing points: no fit.
+  EXPECT_EQ(coarse_fit_facing(region, region_grid, model, {}, model_grid, T_camera_object, 64), 0.0);
+}
+
 }  // namespace
 }  // namespace viewpose

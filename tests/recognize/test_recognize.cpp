@@ -489,6 +489,22 @@ TEST(Recognize, TwoObjectFrameGivesBothWithTheRightIds) {
   expect_jug_and_can_found(r, f);
 }
 
+TEST(Recognize, PointPairVotesAloneOrBesideTheViewsFindBothObjects) {
+  // The frame above with starting poses from point pair votes alone (no view's VFH or roll), and
+  // from both sources ranked together: the same two objects, each at its pose.
+  const ViewDatabase& db = jug_and_can_db();
+  const JugAndCan scene = jug_and_can_scene();
+  const SimulatedFrame f = simulate_image(scene.ds, SimImage{{{0, scene.jug_pose}, {1, scene.can_at(0.25)}}}, SensorModel::kinect_v1(), 9);
+  const Frame frame = frame_from_depth(f.depth, K);
+  RecognizerOptions votes, both;
+  votes.match.source = PoseSource::ppf;
+  both.match.source = PoseSource::both;
+  const Recognition r = Recognizer(db, votes).recognize(frame);
+  expect_jug_and_can_found(r, f);
+  for (const Detection& d : r.detections) EXPECT_EQ(d.match_rank, -1) << d.object_name << ": a pose from votes has no view";
+  expect_jug_and_can_found(Recognizer(db, both).recognize(frame), f);
+}
+
 TEST(Recognize, ObjectsTooSmallForAClusterAreSkippedWithTheSameResult) {
   // A large box (no object of the database) beside the jug, and a database of the jug and a can:
   // the can is too small to explain the box's cluster, so its views are not tried there. Skipping
@@ -680,6 +696,45 @@ TEST(RealData, YcbvWithSixObjectsInTheDatabaseAcceptsNothingWrong) {
   // conflicts were held to 5 % the cracker box was fitted to the keyboard in both frames.
   VIEWPOSE_REQUIRE_SHARED_DATA();
   expect_ycbv_found({2, 5, 8, 12, 14, 21}, 5);
+}
+
+TEST(RealData, ACanStandingOnABoxAndTheBoxAreFoundTogetherFromPointPairVotes) {
+  // YCB-Video 0014 frame 2 (ycbv_real_dev): a master chef can, a sugar box with a potted meat can
+  // standing on it, and a pitcher. The box and the can on it stay one region even in convex parts
+  // (the crease between them is bridged), whose VFH describes neither. Point pair votes give the
+  // can's pose there; it explains half of the region, and the box found in the other half vouches
+  // for it (SplitOptions::joint_min_cluster_explained). Measured: all four within 2 mm of the truth.
+#ifdef VIEWPOSE_SANITIZER_BUILD
+  GTEST_SKIP() << "skipped under the sanitizers: point pair votes on a real frame take minutes there";
+#endif
+  VIEWPOSE_REQUIRE_SHARED_DATA();
+  const auto dir = test::shared_data() / "ycbv_real_dev";
+  const BopDataset ds = open_bop_dataset(dir, "test", {"models"});
+  std::vector<ObjectModel> models;
+  for (int id : {1, 3, 9, 11}) {
+    PlyFile ply = read_ply(ds.model_files.at(id));
+    for (auto& v : ply.mesh.vertices) v *= 0.001f;
+    ply.mesh.normals.clear();
+    models.push_back({id, fmt::format("obj_{:06d}", id), std::move(ply.mesh)});
+  }
+  const ViewDatabase db = build_view_database(models, DatabaseParams{});
+  const auto image = std::find_if(ds.images.begin(), ds.images.end(), [](const BopImage& im) { return im.scene_id == 14 && im.im_id == 2; });
+  ASSERT_NE(image, ds.images.end());
+  const BopFrame bf = load_bop_frame(*image);
+  RecognizerOptions options;
+  options.match.source = PoseSource::both;
+  const Recognition r = Recognizer(db, options).recognize(frame_from_depth(bf.depth, bf.K));
+  std::set<int> found;
+  for (const Detection& d : r.detections) {
+    const DatabaseObject& object = *std::find_if(db.objects.begin(), db.objects.end(), [&](const DatabaseObject& o) { return o.id == d.object_id; });
+    double error = 1e9;
+    for (const GroundTruthPose& g : image->gt) {
+      if (g.obj_id == d.object_id) error = std::min(error, add_s_error(d.T_camera_object, g.T_camera_object, object.mesh.vertices));
+    }
+    EXPECT_LT(error, 0.1 * object.diameter_m) << "a false positive: " << d.object_name;
+    if (error < 0.1 * object.diameter_m) found.insert(d.object_id);
+  }
+  EXPECT_EQ(found, (std::set<int>{1, 3, 9, 11}));
 }
 
 TEST(RealData, AScannedMilkCartonIsFoundInTheKinectSceneWithinThreeMillimetres) {

@@ -36,4 +36,11 @@ struct CoarseFitInputs {
 double coarse_fit(const CoarseFitInputs& in, const Transform& T_camera_view, const Transform& T_camera_object,
                   std::size_t max_points = 64);
 
+/// The same for a pose no view gave (point pair votes): the model's points whose normals face the
+/// camera (the origin) at T_camera_object stand in for the view's. `model_points` and
+/// `model_normals` (outward) are in the object frame. In [0, 1]; 0 when none faces the camera.
+double coarse_fit_facing(std::span<const Eigen::Vector3f> region_points, const OccupancyGrid& region_grid,
+                         std::span<const Eigen::Vector3f> model_points, std::span<const Eigen::Vector3f> model_normals,
+                         const OccupancyGrid& model_grid, const Transform& T_camera_object, std::size_t max_points = 64);
+
 }  // namespace viewpose

@@ -18,6 +18,7 @@
 #include "viewpose/database/view_database.hpp"
 #include "viewpose/describe/crh.hpp"
 #include "viewpose/pose/icp.hpp"
+#include "viewpose/pose/ppf.hpp"
 #include "viewpose/pose/scene_claims.hpp"
 #include "viewpose/pose/verify.hpp"
 #include "viewpose/recognize/frame.hpp"
@@ -34,9 +35,21 @@ struct VerifiedHypothesis {
   double confidence = 0;  ///< pose_confidence(verification)
 };
 
+/// Where a region's starting poses come from. `vfh`: its nearest database views by VFH, each turned
+/// by its CRH rolls (the thesis). `ppf`: point pair feature votes of the region's own surface against
+/// each object's pair table (pose/ppf; needs no clean cluster: an object touching another, or half
+/// hidden, still shows pairs of its own points). `both`: the two sets together, ranked by one coarse fit.
+enum class PoseSource { vfh, ppf, both };
+
 /// Which database views are tried for a region (a cluster, a convex part, what a detection left of
 /// a cluster), the poses each gives, and in what order they are refined and verified.
 struct MatchOptions {
+  /// VFH alone by default: point pair votes cost about 20 ms per object and region on two cores
+  /// (docs/BENCHMARK.md), and what they add was measured in docs/RESULTS.md's terms first.
+  PoseSource source = PoseSource::vfh;
+  /// The pair tables and votes (with source ppf or both); each object's table is made when the
+  /// recognizer is (databases of up to RunOptions::prepare_objects_up_to objects) or on first use.
+  PpfOptions ppf{};
   std::size_t per_object = 20;  ///< nearest views per region and object (thesis: 20, one object)
   /// At most this many views per region in all, the nearest (each object at most `per_object`): with
   /// up to six objects every object gets its 20; a database of a thousand gets the 120 nearest.
@@ -145,6 +158,14 @@ struct SplitOptions {
   double part_max_unmeasured_fraction = 0.3;
   double part_min_inlier_fraction = 0.9;
   double part_min_cluster_explained = 0.9;
+  /// Two objects that touch may stay one region even in convex parts (a can standing on a box, the
+  /// crease between them bridged). A pose that passes every bound but the share of the region it
+  /// explains (at least this much of it: a touching neighbour's share is missing, not wrong) is kept
+  /// aside; if nothing passes in the region, its points are explained away and the rest searched, and
+  /// when the rest gives a detection, the kept pose is verified again on the points that detection
+  /// leaves, with the part bounds above. Both are reported only together: two poses that explain
+  /// the region between them (0: not tried).
+  double joint_min_cluster_explained = 0.3;
 };
 
 /// Time and threads.
@@ -210,7 +231,7 @@ struct Detection {
   double score = 0;          ///< confidence in [0, 1]: the estimated probability that the pose is right (pose/confidence)
   double icp_fitness = 0;    ///< share of cluster points with a model correspondence
   double icp_rmse_m = 0;     ///< RMS point-to-plane residual
-  int match_rank = 0;        ///< the view's rank among the region's nearest by VFH (0 = the nearest)
+  int match_rank = 0;        ///< the view's rank among the region's nearest by VFH (0 = the nearest; -1: from point pair votes)
   float roll_deg = 0;        ///< the CRH roll that led to it
   /// Best verification score (Verification::score) of the half-turned alternatives (0 if none
   /// passed): verification.score minus this is the margin by which the chosen side won.
@@ -267,11 +288,12 @@ class Recognizer {
  private:
   // Describe, match, align, refine and verify one cluster; the first (or best) accepted pose.
   std::optional<Detection> recognize_cluster(const PointCloud& points, const Frame& frame, const VerifyOptions& verify,
-                                             Recognition& out) const;
+                                             Recognition& out, std::optional<Detection>* partial = nullptr) const;
   struct Refined;
   // A starting pose: a database view (by its rank among the region's matches) turned by one CRH roll.
   struct Candidate {
-    std::uint32_t match = 0;  // into Region::matches
+    static constexpr std::uint32_t kFromPairVotes = 0xffffffffu;  // `match` of a pose from point pair votes
+    std::uint32_t match = 0;  // into Region::matches (kFromPairVotes: none)
     std::uint32_t object = 0;
     float roll_deg = 0;
     Transform T_camera_object = Transform::Identity();
@@ -293,6 +315,10 @@ class Recognizer {
     VerifyOptions near_miss;  // verify with the looser conflict bound of a pose the wrong way round
     bool try_near_misses = false;
     bool screen_done = false;  // prescreen has ordered its candidates
+    VerifyOptions partial;  // verify with min_cluster_explained lowered (SplitOptions::joint_min_cluster_explained)
+    // The best pose so far that passed `partial` but not `verify` (with a confidence computed as if
+    // it had), for search's `partial`.
+    mutable std::optional<Detection> best_partial;
     // By object, the refined poses verification refused so far (try_candidates skips their
     // repeats). A region's batches are tried one after another, on the calling thread.
     mutable std::vector<std::vector<Transform>> refused;
@@ -304,9 +330,20 @@ class Recognizer {
   // The regions' starting poses tried best first across them (screened by a short ICP, else by
   // coarse fit), within one budget (the convex parts of a cluster share it); the first accepted (or
   // the best), challenged and turned.
-  std::optional<Detection> search(std::vector<Region>& regions, const Frame& frame, Recognition& out) const;
-  // Every roll of every matched view as a starting pose, best coarse fit first.
+  // With `partial`: where nothing passes, the best pose that failed only by the share of its region
+  // it explains (SplitOptions::joint_min_cluster_explained), if any, for explain_jointly.
+  std::optional<Detection> search(std::vector<Region>& regions, const Frame& frame, Recognition& out,
+                                  std::optional<Detection>* partial = nullptr) const;
+  // `partial`'s points taken out of `points` and the rest searched; when the rest gives a detection
+  // and `partial`, verified again on the points that one leaves, passes `verify`, both are added.
+  bool explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,
+                       Recognition& out) const;
+  // Every roll of every matched view (and with PoseSource ppf or both, every pose the pair votes give)
+  // as a starting pose, best coarse fit first.
   std::vector<Candidate> rank_candidates(const Region& region, Recognition& out) const;
+  // Each object's point pair vote poses for the region, with their coarse fit (the model's points
+  // that face the camera standing in for a view's), object by object.
+  std::vector<Candidate> pair_vote_candidates(const Region& region, const OccupancyGrid& region_grid) const;
   // The MatchOptions::prescreen starting poses from `from` on (best coarse fit first) refined by a
   // short ICP and put in the order of where it brought them (Candidate::priority), best first.
   void prescreen(Region& region, std::size_t from, Recognition& out) const;
@@ -368,8 +405,11 @@ class Recognizer {
     OccupancyGrid occupancy;  // of the model points, for coarse_fit
     TriangleMesh drawn;      // the mesh verification draws (simplified)
     int closed_winding = 0;  // closed_mesh_winding of `drawn`
+    std::once_flag ppf_once;  // the pair table is made only where pair votes are asked for
+    std::unique_ptr<PpfModel> ppf;
   };
   const PreparedObject& prepared(std::uint32_t object) const;
+  const PpfModel& pair_table(std::uint32_t object) const;
   const IcpTarget& icp_target(std::uint32_t object) const { return *prepared(object).target; }
   // Past the deadline (and marks `out` cut short): no further views, parts or checks are tried.
   bool out_of_time(Recognition& out) const;
