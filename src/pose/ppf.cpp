@@ -143,6 +143,10 @@ PpfModel::PpfModel(std::span<const Eigen::Vector3f> points, std::span<const Eige
   step_m_ = static_cast<float>(options.sample_fraction * diameter_m);
   distance_bins_ = static_cast<int>(std::floor(1.0 / options.sample_fraction)) + 1;
   const double angle_step = 2 * kPi / options.angle_bins;
+  phi_bin_.resize(2 * kAlphaUnits);
+  for (std::uint32_t x = 0; x < 2 * kAlphaUnits; ++x) {
+    phi_bin_[x] = static_cast<std::uint16_t>((x % kAlphaUnits) / (kAlphaUnits / static_cast<std::uint32_t>(options.angle_bins)));
+  }
   feature_angle_bins_ = static_cast<int>(std::ceil(kPi / angle_step - 1e-9));
   sampled_ = ppf_sample(points, normals, step_m_, options.normal_split_deg);
   if (sampled_.size() < 2) throw Error("ppf: the model has fewer than two oriented points");
@@ -191,7 +195,6 @@ std::vector<PpfHypothesis> PpfModel::hypotheses(const OrientedPoints& scene) con
   std::vector<Peak> peaks(references);
   const float radius = static_cast<float>(diameter_m_);
   const std::size_t model_points = sampled_.size();
-  const std::uint32_t fine_per_bin = kAlphaUnits / static_cast<std::uint32_t>(bins);
   const auto max_bucket = static_cast<std::uint32_t>(std::max(1.0, options_.max_bucket_per_point * static_cast<double>(sampled_.size())));
 
 #pragma omp parallel
@@ -225,9 +228,8 @@ std::vector<PpfHypothesis> PpfModel::hypotheses(const OrientedPoints& scene) con
                 if (key_start_[kk + 1] - key_start_[kk] > max_bucket) continue;
                 for (std::uint32_t e = key_start_[kk]; e < key_start_[kk + 1]; ++e) {
                   const Entry& entry = entries_[e];
-                  // phi = alpha_scene - alpha_model in fine units, wrapped into [0, 2 pi).
-                  const std::uint32_t phi = (alpha_scene_fine + kAlphaUnits - entry.alpha) % kAlphaUnits;
-                  const std::size_t slot = entry.point * static_cast<std::size_t>(bins) + phi / fine_per_bin;
+                  // phi = alpha_scene - alpha_model in fine units, wrapped into [0, 2 pi), and its bin.
+                  const std::size_t slot = entry.point * static_cast<std::size_t>(bins) + phi_bin_[alpha_scene_fine + kAlphaUnits - entry.alpha];
                   const std::uint32_t v = ++votes[slot];
                   if (v == 1) touched.push_back(static_cast<std::uint32_t>(slot));
                   if (v > best || (v == best && slot < best_slot)) best = v, best_slot = static_cast<std::uint32_t>(slot);
