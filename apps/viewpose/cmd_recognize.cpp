@@ -71,8 +71,8 @@ struct RecognizeFlags {
         ->capture_default_str();
     cmd.add_option("--source", source,
                    "Where starting poses come from: vfh (each cluster's nearest database views, as the thesis), ppf "
-                   "(point pair feature votes over the cluster: touching and half-hidden objects; about 20 ms per "
-                   "object and cluster more) or both, ranked together")
+                   "(point pair feature votes over the cluster: touching and half-hidden objects; about 15 ms per "
+                   "object and cluster more) or both (the views' poses first; where none passes, the votes')")
         ->check(CLI::IsMember({"vfh", "ppf", "both"}))
         ->capture_default_str();
     cmd.add_option("--deadline-ms", deadline_ms,

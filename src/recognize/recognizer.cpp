@@ -513,7 +513,7 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
     const CoarseFitInputs in{region.icp_source, &region_grid, view.icp_points, &prepared(c.object).occupancy};
     c.fit = coarse_fit(in, c.T_camera_object * view.T_view_object.inverse(), c.T_camera_object, options_.match.fit_points);
   }
-  if (options_.match.source != PoseSource::vfh) {
+  if (options_.match.source == PoseSource::ppf) {
     for (Candidate& c : pair_vote_candidates(region, region_grid)) candidates.push_back(c);
   }
   // Best fit first; equal fits keep the order of the views' VFH distance and their rolls' peaks.
@@ -682,35 +682,50 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
   // of them, the best kept). The regions share the budget: the parts of one cluster compete for it.
   const bool every = options_.accept.keep_best || options_.match.max_hypotheses == 0;
   const std::size_t budget = every ? std::numeric_limits<std::size_t>::max() : options_.match.max_hypotheses;
-  std::vector<std::size_t> next(regions.size(), 0), end(regions.size());
-  for (std::size_t r = 0; r < regions.size(); ++r) end[r] = std::min(regions[r].candidates.size(), budget);
   const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
   // The short ICP's screen (prescreen): a region alone is screened only once its first batch, in
   // coarse fit order, has failed (most recognized regions pass in it); the parts of a split
   // cluster (when there are two or more), ranked against each other, all at once by one measure. The exhaustive search
   // (and keep_best) tries every pose anyway: no order to choose.
   const bool screen = !every && options_.match.prescreen > 0;
-  if (screen && regions.size() > 1) {
-    for (Region& region : regions) prescreen(region, 0, out);
-  }
+  std::vector<std::size_t> next(regions.size(), 0), end(regions.size());
   std::optional<Detection> best;
-  std::size_t best_region = 0, spent = 0;
+  std::size_t best_region = 0;
   std::vector<std::size_t> which;
-  while (spent < budget && !(best && !options_.accept.keep_best)) {
-    if (out_of_time(out)) break;
-    if (screen && regions.size() == 1 && !regions[0].screen_done && next[0] > 0) prescreen(regions[0], next[0], out);
-    // The region whose next starting pose ranks best (the first of equals: parts come largest first).
-    std::size_t r = regions.size();
-    for (std::size_t i = 0; i < regions.size(); ++i) {
-      if (next[i] < end[i] && (r == regions.size() || regions[i].candidates[next[i]].priority() > regions[r].candidates[next[r]].priority())) r = i;
+  // With PoseSource::both, the views' poses first, exactly as vfh alone tries them; where none
+  // passes, the point pair votes' poses, with a budget of their own: both finds all that vfh does.
+  const int sources = options_.match.source == PoseSource::both ? 2 : 1;
+  for (int source = 0; source < sources && !best && !out_of_time(out); ++source) {
+    if (source == 1) {
+      const auto t = Clock::now();
+      for (Region& region : regions) {
+        region.candidates = pair_vote_candidates(region, OccupancyGrid(region.icp_source, options_.match.fit_cell_m));
+        std::stable_sort(region.candidates.begin(), region.candidates.end(), [](const Candidate& x, const Candidate& y) { return x.fit > y.fit; });
+        region.screen_done = false;
+      }
+      out.times.match_ms += ms_since(t);
     }
-    if (r == regions.size()) break;
-    which.clear();
-    for (; next[r] < end[r] && which.size() < batch && spent < budget; ++next[r], ++spent) which.push_back(next[r]);
-    std::optional<Detection> det = try_candidates(regions[r], which, options_.accept.keep_best, frame, out);
-    if (det && (!best || det->verification.score > best->verification.score)) {
-      best = std::move(det);
-      best_region = r;
+    for (std::size_t r = 0; r < regions.size(); ++r) next[r] = 0, end[r] = std::min(regions[r].candidates.size(), budget);
+    if (screen && regions.size() > 1) {
+      for (Region& region : regions) prescreen(region, 0, out);
+    }
+    std::size_t spent = 0;
+    while (spent < budget && !(best && !options_.accept.keep_best)) {
+      if (out_of_time(out)) break;
+      if (screen && regions.size() == 1 && !regions[0].screen_done && next[0] > 0) prescreen(regions[0], next[0], out);
+      // The region whose next starting pose ranks best (the first of equals: parts come largest first).
+      std::size_t r = regions.size();
+      for (std::size_t i = 0; i < regions.size(); ++i) {
+        if (next[i] < end[i] && (r == regions.size() || regions[i].candidates[next[i]].priority() > regions[r].candidates[next[r]].priority())) r = i;
+      }
+      if (r == regions.size()) break;
+      which.clear();
+      for (; next[r] < end[r] && which.size() < batch && spent < budget; ++next[r], ++spent) which.push_back(next[r]);
+      std::optional<Detection> det = try_candidates(regions[r], which, options_.accept.keep_best, frame, out);
+      if (det && (!best || det->verification.score > best->verification.score)) {
+        best = std::move(det);
+        best_region = r;
+      }
     }
   }
   if (!best) {

@@ -38,14 +38,15 @@ struct VerifiedHypothesis {
 /// Where a region's starting poses come from. `vfh`: its nearest database views by VFH, each turned
 /// by its CRH rolls (the thesis). `ppf`: point pair feature votes of the region's own surface against
 /// each object's pair table (pose/ppf; needs no clean cluster: an object touching another, or half
-/// hidden, still shows pairs of its own points). `both`: the two sets together, ranked by one coarse fit.
+/// hidden, still shows pairs of its own points). `both`: the views' poses first, as `vfh` tries them,
+/// and where none passes, the votes' poses, with a budget of their own.
 enum class PoseSource { vfh, ppf, both };
 
 /// Which database views are tried for a region (a cluster, a convex part, what a detection left of
 /// a cluster), the poses each gives, and in what order they are refined and verified.
 struct MatchOptions {
-  /// VFH alone by default: point pair votes cost about 20 ms per object and region on two cores
-  /// (docs/BENCHMARK.md), and what they add was measured in docs/RESULTS.md's terms first.
+  /// VFH alone by default: point pair votes cost about 15 ms per object and region (docs/BENCHMARK.md,
+  /// "Point pair votes": with `both`, on the real YCB-V frames 0.40 s a frame against 0.07, for two poses more of 28).
   PoseSource source = PoseSource::vfh;
   /// The pair tables and votes (with source ppf or both); each object's table is made when the
   /// recognizer is (databases of up to RunOptions::prepare_objects_up_to objects) or on first use.
