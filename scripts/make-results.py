@@ -140,7 +140,8 @@ def rank_curve(ev, details, max_rank=20):
     for scene, score in ev["per_scene"].items():
         ranks = [det["match_rank"] for det, est in zip(detections, ev["estimates"])
                  if str(est["scene_id"]) == scene and est["correct_add_s"] and est["target"]]
-        curves[int(scene)] = [sum(r < n for r in ranks) / score["targets"] for n in range(1, max_rank + 1)]
+        # (A pose from point pair votes has no view: match rank -1, found at no rank.)
+        curves[int(scene)] = [sum(0 <= r < n for r in ranks) / score["targets"] for n in range(1, max_rank + 1)]
     return curves
 
 

@@ -132,14 +132,18 @@ std::size_t PpfModel::key(int d, int a1, int a2, int a3) const {
          static_cast<std::size_t>(a3);
 }
 
-PpfModel::PpfModel(std::span<const Eigen::Vector3f> points, std::span<const Eigen::Vector3f> normals, double diameter_m,
-                   const PpfOptions& options)
-    : options_(options), diameter_m_(diameter_m) {
-  if (!(diameter_m > 0) || !std::isfinite(diameter_m)) throw Error("ppf: the object's diameter must be positive");
+void check_ppf_options(const PpfOptions& options) {
   if (!(options.sample_fraction > 0 && options.sample_fraction < 1) || options.angle_bins < 4 ||
       kAlphaUnits % static_cast<std::uint32_t>(options.angle_bins) != 0 || options.reference_stride < 1) {
     throw Error("ppf: bad options (sample_fraction in (0, 1), angle_bins >= 4 dividing 13440, reference_stride >= 1)");
   }
+}
+
+PpfModel::PpfModel(std::span<const Eigen::Vector3f> points, std::span<const Eigen::Vector3f> normals, double diameter_m,
+                   const PpfOptions& options)
+    : options_(options), diameter_m_(diameter_m) {
+  if (!(diameter_m > 0) || !std::isfinite(diameter_m)) throw Error("ppf: the object's diameter must be positive");
+  check_ppf_options(options);
   step_m_ = static_cast<float>(options.sample_fraction * diameter_m);
   distance_bins_ = static_cast<int>(std::floor(1.0 / options.sample_fraction)) + 1;
   const double angle_step = 2 * kPi / options.angle_bins;

@@ -40,6 +40,8 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
     prepared_.push_back(std::make_unique<PreparedObject>());
     largest_diameter_m_ = std::max(largest_diameter_m_, o.diameter_m);
   }
+  // Pair tables may be made later, on a cluster's thread: their options are checked now.
+  if (options_.match.source != PoseSource::vfh) check_ppf_options(options_.match.ppf);
   if (db.objects.size() <= options_.run.prepare_objects_up_to) {
     // (An exception may not leave a parallel loop: the first is kept and thrown after it.)
     const auto objects = static_cast<std::ptrdiff_t>(db.objects.size());
@@ -113,13 +115,19 @@ const Recognizer::PreparedObject& Recognizer::prepared(std::uint32_t object) con
   return p;
 }
 
-const PpfModel& Recognizer::pair_table(std::uint32_t object) const {
+const PpfModel* Recognizer::pair_table(std::uint32_t object) const {
   PreparedObject& p = *prepared_[object];
   std::call_once(p.ppf_once, [&] {
     const DatabaseObject& o = db_.objects[object];
-    p.ppf = std::make_unique<PpfModel>(o.model_points, o.model_normals, o.diameter_m, options_.match.ppf);
+    // (The options were checked when the recognizer was made: what fails here is the model, which
+    // then gives no votes, once, rather than an error in every region.)
+    try {
+      p.ppf = std::make_unique<PpfModel>(o.model_points, o.model_normals, o.diameter_m, options_.match.ppf);
+    } catch (const Error&) {
+      p.ppf.reset();
+    }
   });
-  return *p.ppf;
+  return p.ppf.get();
 }
 
 VerifyModel Recognizer::verify_model(std::uint32_t object) const {
@@ -242,14 +250,17 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   // first. Two objects side by side span at most twice the largest object.
   if (!options_.split.enabled || depth >= options_.split.max_depth ||
       size > options_.split.max_size_factor * largest_diameter_m_ || out_of_time(out)) {
-    if (partial && options_.split.enabled && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out);
+    if (partial && options_.split.enabled && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth);
     return;
   }
   auto t = Clock::now();
   const std::vector<Cluster> parts = convex_segments(points, options_.split.parts);
   out.times.split_ms += ms_since(t);
   // One part that is nearly the whole region has been tried already.
-  if (parts.empty() || (parts.size() == 1 && parts[0].size() > 0.9 * static_cast<double>(points.size()))) return;
+  if (parts.empty() || (parts.size() == 1 && parts[0].size() > 0.9 * static_cast<double>(points.size()))) {
+    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth);
+    return;
+  }
   ++out.split_clusters;
   // Every part described, then their starting poses tried together, within one budget.
   std::vector<Region> regions;
@@ -265,15 +276,15 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
     // No part passed alone: a pose that explains part of the region (or of a part) well, and
     // whatever the rest of the region is.
     if (!partial || (part_partial && part_partial->verification.score > partial->verification.score)) partial = std::move(part_partial);
-    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out);
+    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth);
     return;
   }
   det->from_split_cluster = true;
   recognize_rest(points, std::move(*det), frame, out, depth);
 }
 
-bool Recognizer::explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,
-                                 Recognition& out) const {
+void Recognizer::explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,
+                                 Recognition& out, int depth) const {
   const auto t = Clock::now();
   const std::vector<char> explained = explained_points(partial, points);
   std::vector<std::uint32_t> rest;
@@ -283,7 +294,7 @@ bool Recognizer::explain_jointly(const PointCloud& points, const Detection& part
   const std::vector<Cluster> rest_clusters = euclidean_clusters(points, rest, options_.segment.clusters);
   out.times.split_ms += ms_since(t);
   for (const Cluster& c : rest_clusters) {
-    if (out_of_time(out)) return false;
+    if (out_of_time(out)) return;
     const PointCloud rest_points = cluster_points(points, c);
     if (bounding_box(rest_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
     std::optional<Detection> other = recognize_cluster(rest_points, frame, verify, out);
@@ -298,16 +309,29 @@ bool Recognizer::explain_jointly(const PointCloud& points, const Detection& part
     const Verification v = verify_pose(verify_model(partial.object_index), partial.T_camera_object, frame.depth, frame.K, own.points, verify);
     out.times.verify_ms += ms_since(tv);
     const double confidence = v.accepted ? pose_confidence(v) : 0.0;
+    if (v.accepted && options_.accept.on_verified) options_.accept.on_verified({partial.object_index, partial.T_camera_object, v, confidence});
     if (!v.accepted || confidence < options_.accept.min_confidence) continue;
     Detection first = partial;
     first.verification = v;
     first.score = confidence;
+    first.cluster_points = own.size();
     first.from_split_cluster = other->from_split_cluster = true;
+    // What neither explains (a third object against these two) is recognized again.
+    std::vector<std::uint32_t> left;
+    if (options_.split.enabled && depth < options_.split.max_depth) {
+      const std::vector<char> by_first = explained_points(first, points);
+      for (std::uint32_t i = 0; i < points.size(); ++i) {
+        if (!by_first[i] && !taken[i]) left.push_back(i);
+      }
+    }
     out.detections.push_back(std::move(first));
     out.detections.push_back(std::move(*other));
-    return true;
+    for (const Cluster& l : euclidean_clusters(points, left, options_.segment.clusters)) {
+      if (out_of_time(out)) return;
+      recognize_region(cluster_points(points, l), frame, out, depth + 1);
+    }
+    return;
   }
-  return false;
 }
 
 void Recognizer::recognize_rest(const PointCloud& points, Detection detection, const Frame& frame, Recognition& out,
@@ -534,7 +558,9 @@ std::vector<Recognizer::Candidate> Recognizer::pair_vote_candidates(const Region
     const auto o = static_cast<std::uint32_t>(k);
     const DatabaseObject& object = db_.objects[o];
     if (object.diameter_m < region.smallest_diameter) continue;
-    const PpfModel& table = pair_table(o);
+    const PpfModel* found = pair_table(o);
+    if (!found) continue;
+    const PpfModel& table = *found;
     // The region sampled as the object's table was, at its own step (a share of its diameter).
     const OrientedPoints scene = ppf_sample(d.cloud.points, d.cloud.normals, table.sample_step_m(), table.options().normal_split_deg);
     for (const PpfHypothesis& h : table.hypotheses(scene)) {

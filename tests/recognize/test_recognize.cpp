@@ -503,6 +503,11 @@ TEST(Recognize, PointPairVotesAloneOrBesideTheViewsFindBothObjects) {
   expect_jug_and_can_found(r, f);
   for (const Detection& d : r.detections) EXPECT_EQ(d.match_rank, -1) << d.object_name << ": a pose from votes has no view";
   expect_jug_and_can_found(Recognizer(db, both).recognize(frame), f);
+  // Bad pair options are refused when the recognizer is made, in one line, not in a region later.
+  RecognizerOptions bad = votes;
+  bad.match.ppf.angle_bins = 11;  // (does not divide 13440)
+  bad.run.prepare_objects_up_to = 0;  // (the tables would be made on first use)
+  EXPECT_THROW(Recognizer(db, bad), Error);
 }
 
 TEST(Recognize, ObjectsTooSmallForAClusterAreSkippedWithTheSameResult) {

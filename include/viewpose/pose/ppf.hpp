@@ -47,6 +47,10 @@ struct PpfOptions {
   std::size_t max_hypotheses = 10;  ///< the clusters with the most votes, most first
 };
 
+/// Throws Error (one line) unless sample_fraction is in (0, 1), angle_bins >= 4 divides 13440 and
+/// reference_stride >= 1: what PpfModel checks first, for callers that make their tables later.
+void check_ppf_options(const PpfOptions& options);
+
 /// Oriented points: positions and unit normals, one each.
 struct OrientedPoints {
   std::vector<Eigen::Vector3f> points;

@@ -291,7 +291,8 @@ class Recognizer {
   std::optional<Detection> recognize_cluster(const PointCloud& points, const Frame& frame, const VerifyOptions& verify,
                                              Recognition& out, std::optional<Detection>* partial = nullptr) const;
   struct Refined;
-  // A starting pose: a database view (by its rank among the region's matches) turned by one CRH roll.
+  // A starting pose: a database view (by its rank among the region's matches) turned by one CRH roll,
+  // or a pose from point pair votes (match: kFromPairVotes).
   struct Candidate {
     static constexpr std::uint32_t kFromPairVotes = 0xffffffffu;  // `match` of a pose from point pair votes
     std::uint32_t match = 0;  // into Region::matches (kFromPairVotes: none)
@@ -336,9 +337,10 @@ class Recognizer {
   std::optional<Detection> search(std::vector<Region>& regions, const Frame& frame, Recognition& out,
                                   std::optional<Detection>* partial = nullptr) const;
   // `partial`'s points taken out of `points` and the rest searched; when the rest gives a detection
-  // and `partial`, verified again on the points that one leaves, passes `verify`, both are added.
-  bool explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,
-                       Recognition& out) const;
+  // and `partial`, verified again on the points that one leaves, passes `verify`, both are added,
+  // and what neither explains is recognized again (depth + 1).
+  void explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,
+                       Recognition& out, int depth) const;
   // Every roll of every matched view (and with PoseSource ppf or both, every pose the pair votes give)
   // as a starting pose, best coarse fit first.
   std::vector<Candidate> rank_candidates(const Region& region, Recognition& out) const;
@@ -410,7 +412,8 @@ class Recognizer {
     std::unique_ptr<PpfModel> ppf;
   };
   const PreparedObject& prepared(std::uint32_t object) const;
-  const PpfModel& pair_table(std::uint32_t object) const;
+  // The object's pair table; null where its model gives none (fewer than two oriented points).
+  const PpfModel* pair_table(std::uint32_t object) const;
   const IcpTarget& icp_target(std::uint32_t object) const { return *prepared(object).target; }
   // Past the deadline (and marks `out` cut short): no further views, parts or checks are tried.
   bool out_of_time(Recognition& out) const;
