@@ -192,7 +192,8 @@ PYBIND11_MODULE(viewpose, m) {
              if (source == "vfh") o.match.source = PoseSource::vfh;
              else if (source == "ppf") o.match.source = PoseSource::ppf;
              else if (source == "both") o.match.source = PoseSource::both;
-             else throw py::value_error("source: \"" + source + "\" is none of vfh, ppf, both");
+             else if (source == "touching") o.match.source = PoseSource::touching;
+             else throw py::value_error("source: \"" + source + "\" is none of vfh, ppf, both, touching");
              o.accept.keep_best = keep_best;
              o.split.enabled = split_touching;
              o.match.per_object = matches;
@@ -207,7 +208,7 @@ PYBIND11_MODULE(viewpose, m) {
            py::arg("budget") = RecognizerOptions{}.match.max_hypotheses, py::arg("screen") = RecognizerOptions{}.match.prescreen,
            py::arg("source") = "vfh", py::arg("deadline_ms") = 0.0, py::arg("min_score") = py::none(),
            "Options as `viewpose recognize` has them: keep_best, split_touching (--no-split is False), matches, "
-           "budget (0: every starting pose), screen (0: coarse fit order only), source (\"vfh\", \"ppf\" or \"both\": where "
+           "budget (0: every starting pose), screen (0: coarse fit order only), source (\"vfh\", \"ppf\", \"both\" or \"touching\": where "
            "starting poses come from, --source), deadline_ms (0: none), min_score "
            "(None: the default threshold)")
       .def(

@@ -72,8 +72,9 @@ struct RecognizeFlags {
     cmd.add_option("--source", source,
                    "Where starting poses come from: vfh (each cluster's nearest database views, as the thesis), ppf "
                    "(point pair feature votes over the cluster: touching and half-hidden objects; about 15 ms per "
-                   "object and cluster more) or both (the views' poses first; where none passes, the votes')")
-        ->check(CLI::IsMember({"vfh", "ppf", "both"}))
+                   "object and cluster more), both (the views' poses first; where none passes, the votes'), or touching (as both, "
+                   "but votes only in what a detection leaves of its region: objects touching it)")
+        ->check(CLI::IsMember({"vfh", "ppf", "both", "touching"}))
         ->capture_default_str();
     cmd.add_option("--deadline-ms", deadline_ms,
                    "Stop trying poses after this long per frame and report what is verified, marked cut short (0: no limit)")
@@ -94,7 +95,10 @@ struct RecognizeFlags {
     o.match.per_object = matches;
     o.match.max_hypotheses = budget;
     o.match.prescreen = screen;
-    o.match.source = source == "ppf" ? PoseSource::ppf : source == "both" ? PoseSource::both : PoseSource::vfh;
+    o.match.source = source == "ppf"    ? PoseSource::ppf
+                     : source == "both" ? PoseSource::both
+                     : source == "touching" ? PoseSource::touching
+                                            : PoseSource::vfh;
     o.run.deadline_ms = deadline_ms;
     if (min_score >= 0) o.accept.min_confidence = min_score;
     return o;

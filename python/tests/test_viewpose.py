@@ -114,11 +114,11 @@ def test_starting_poses_from_point_pair_votes_are_an_option(scene):
     png, gt = scene["frames"][0]
     depth = viewpose.read_depth_png(png)
     t_true = np.array(gt["cam_t_m2c"]) / 1000.0
-    for source in ("ppf", "both"):
+    for source in ("ppf", "both", "touching"):
         r = viewpose.Recognizer(db, source=source).recognize(depth, K=scene["K"], depth_scale=scene["scale"])
         assert [d.object_id for d in r] == [1], source
         assert np.linalg.norm(r[0].T_camera_object[:3, 3] - t_true) < 0.01, source
-    with pytest.raises(ValueError, match="vfh, ppf, both"):
+    with pytest.raises(ValueError, match="vfh, ppf, both, touching"):
         viewpose.Recognizer(db, source="sift")
 
 

@@ -57,7 +57,8 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
       }
     }
     if (failed) std::rethrow_exception(failed);
-    if (options_.match.source != PoseSource::vfh) {
+    // (With touching, only the objects voted for in a detection's rest: made on first use.)
+    if (options_.match.source == PoseSource::ppf || options_.match.source == PoseSource::both) {
 #pragma omp parallel for schedule(dynamic, 1)
       for (std::ptrdiff_t o = 0; o < objects; ++o) {
         try {
@@ -238,9 +239,13 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
     if (z / static_cast<double>(points.size()) > options_.verify.max_depth_m) return;
   }
   const double size = bounding_box(points.points).diagonal();
+  // Point pair votes after the views' poses: everywhere (both), or in what a detection left (depth
+  // above 0: an object touching the one found).
+  const PoseSource source = options_.match.source;
+  const bool votes = source == PoseSource::both || (source == PoseSource::touching && depth > 0);
   std::optional<Detection> partial;  // a pose that explains part of the region well (joint_min_cluster_explained)
   if (size <= options_.match.max_region_size_factor * largest_diameter_m_) {
-    if (std::optional<Detection> det = recognize_cluster(points, frame, depth > 0 ? part_verify : options_.verify, out, &partial)) {
+    if (std::optional<Detection> det = recognize_cluster(points, frame, depth > 0 ? part_verify : options_.verify, out, &partial, votes)) {
       det->from_split_cluster = depth > 0;
       recognize_rest(points, std::move(*det), frame, out, depth);
       return;
@@ -271,7 +276,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
     if (std::optional<Region> region = describe_region(part_points, frame, part_verify, out)) regions.push_back(std::move(*region));
   }
   std::optional<Detection> part_partial;
-  std::optional<Detection> det = search(regions, frame, out, &part_partial);
+  std::optional<Detection> det = search(regions, frame, out, &part_partial, votes);
   if (!det) {
     // No part passed alone: a pose that explains part of the region (or of a part) well, and
     // whatever the rest of the region is.
@@ -297,7 +302,7 @@ void Recognizer::explain_jointly(const PointCloud& points, const Detection& part
     if (out_of_time(out)) return;
     const PointCloud rest_points = cluster_points(points, c);
     if (bounding_box(rest_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
-    std::optional<Detection> other = recognize_cluster(rest_points, frame, verify, out);
+    std::optional<Detection> other = recognize_cluster(rest_points, frame, verify, out, nullptr, options_.match.source != PoseSource::vfh);
     if (!other) continue;
     // The kept pose on what the other leaves of the region: its own share, judged as a part.
     const auto tv = Clock::now();
@@ -695,14 +700,14 @@ void Recognizer::turn_if_better(const Region& region, Detection& best, const Fra
 
 std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points, const Frame& frame,
                                                        const VerifyOptions& verify, Recognition& out,
-                                                       std::optional<Detection>* partial) const {
+                                                       std::optional<Detection>* partial, bool votes) const {
   std::vector<Region> regions;
   if (std::optional<Region> region = describe_region(points, frame, verify, out)) regions.push_back(std::move(*region));
-  return search(regions, frame, out, partial);
+  return search(regions, frame, out, partial, votes);
 }
 
 std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const Frame& frame, Recognition& out,
-                                            std::optional<Detection>* partial) const {
+                                            std::optional<Detection>* partial, bool votes) const {
   // The starting poses of every region, best first across them (by the screen, else coarse fit), a
   // batch at a time from one region, until one passes or the budget is spent (with keep_best: all
   // of them, the best kept). The regions share the budget: the parts of one cluster compete for it.
@@ -718,9 +723,10 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
   std::optional<Detection> best;
   std::size_t best_region = 0;
   std::vector<std::size_t> which;
-  // With PoseSource::both, the views' poses first, exactly as vfh alone tries them; where none
-  // passes, the point pair votes' poses, with a budget of their own: both finds all that vfh does.
-  const int sources = options_.match.source == PoseSource::both ? 2 : 1;
+  // With `votes` (PoseSource both, touching), the views' poses first, exactly as vfh alone tries
+  // them; where none passes, the point pair votes' poses, with a budget of their own: what vfh
+  // finds is found the same way. (With ppf, the votes' poses are the region's candidates already.)
+  const int sources = votes && options_.match.source != PoseSource::ppf ? 2 : 1;
   for (int source = 0; source < sources && !best && !out_of_time(out); ++source) {
     if (source == 1) {
       const auto t = Clock::now();

@@ -40,7 +40,10 @@ struct VerifiedHypothesis {
 /// each object's pair table (pose/ppf; needs no clean cluster: an object touching another, or half
 /// hidden, still shows pairs of its own points). `both`: the views' poses first, as `vfh` tries them,
 /// and where none passes, the votes' poses, with a budget of their own.
-enum class PoseSource { vfh, ppf, both };
+/// `touching`: the views' poses everywhere, and in what a detection leaves of its region (an
+/// object touching the one found, which no view's VFH describes whole) the votes' poses too, after
+/// the views': votes where they are most needed, at a fraction of their cost everywhere.
+enum class PoseSource { vfh, ppf, both, touching };
 
 /// Which database views are tried for a region (a cluster, a convex part, what a detection left of
 /// a cluster), the poses each gives, and in what order they are refined and verified.
@@ -288,8 +291,9 @@ class Recognizer {
 
  private:
   // Describe, match, align, refine and verify one cluster; the first (or best) accepted pose.
+  // With `votes`, where no view's pose passes, the point pair votes' (PoseSource both, touching).
   std::optional<Detection> recognize_cluster(const PointCloud& points, const Frame& frame, const VerifyOptions& verify,
-                                             Recognition& out, std::optional<Detection>* partial = nullptr) const;
+                                             Recognition& out, std::optional<Detection>* partial = nullptr, bool votes = false) const;
   struct Refined;
   // A starting pose: a database view (by its rank among the region's matches) turned by one CRH roll,
   // or a pose from point pair votes (match: kFromPairVotes).
@@ -335,7 +339,7 @@ class Recognizer {
   // With `partial`: where nothing passes, the best pose that failed only by the share of its region
   // it explains (SplitOptions::joint_min_cluster_explained), if any, for explain_jointly.
   std::optional<Detection> search(std::vector<Region>& regions, const Frame& frame, Recognition& out,
-                                  std::optional<Detection>* partial = nullptr) const;
+                                  std::optional<Detection>* partial = nullptr, bool votes = false) const;
   // `partial`'s points taken out of `points` and the rest searched; when the rest gives a detection
   // and `partial`, verified again on the points that one leaves, passes `verify`, both are added,
   // and what neither explains is recognized again (depth + 1).
