@@ -291,14 +291,9 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
 void Recognizer::explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,
                                  Recognition& out, int depth) const {
   const auto t = Clock::now();
-  const std::vector<char> explained = explained_points(partial, points);
-  std::vector<std::uint32_t> rest;
-  for (std::uint32_t i = 0; i < points.size(); ++i) {
-    if (!explained[i]) rest.push_back(i);
-  }
-  const std::vector<Cluster> rest_clusters = euclidean_clusters(points, rest, options_.segment.clusters);
+  std::vector<char> explained = explained_points(partial, points);
   out.times.split_ms += ms_since(t);
-  for (const Cluster& c : rest_clusters) {
+  for (const Cluster& c : unexplained_clusters(points, explained, out)) {
     if (out_of_time(out)) return;
     const PointCloud rest_points = cluster_points(points, c);
     if (bounding_box(rest_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
@@ -321,17 +316,13 @@ void Recognizer::explain_jointly(const PointCloud& points, const Detection& part
     first.score = confidence;
     first.cluster_points = own.size();
     first.from_split_cluster = other->from_split_cluster = true;
-    // What neither explains (a third object against these two) is recognized again.
-    std::vector<std::uint32_t> left;
-    if (options_.split.enabled && depth < options_.split.max_depth) {
-      const std::vector<char> by_first = explained_points(first, points);
-      for (std::uint32_t i = 0; i < points.size(); ++i) {
-        if (!by_first[i] && !taken[i]) left.push_back(i);
-      }
-    }
     out.detections.push_back(std::move(first));
     out.detections.push_back(std::move(*other));
-    for (const Cluster& l : euclidean_clusters(points, left, options_.segment.clusters)) {
+    // What neither explains (a third object against these two) is recognized again. (The kept
+    // pose is unchanged: its points are those found first.)
+    if (!options_.split.enabled || depth >= options_.split.max_depth) return;
+    for (std::size_t i = 0; i < points.size(); ++i) explained[i] = explained[i] || taken[i];
+    for (const Cluster& l : unexplained_clusters(points, explained, out)) {
       if (out_of_time(out)) return;
       recognize_region(cluster_points(points, l), frame, out, depth + 1);
     }
@@ -349,18 +340,25 @@ void Recognizer::recognize_rest(const PointCloud& points, Detection detection, c
   if (go_on) {
     const auto t = Clock::now();
     const std::vector<char> explained = explained_points(detection, points);
-    std::vector<std::uint32_t> rest;
-    for (std::uint32_t i = 0; i < points.size(); ++i) {
-      if (!explained[i]) rest.push_back(i);
-    }
-    rest_clusters = euclidean_clusters(points, rest, options_.segment.clusters);
     out.times.split_ms += ms_since(t);
+    rest_clusters = unexplained_clusters(points, explained, out);
   }
   out.detections.push_back(std::move(detection));
   for (const Cluster& c : rest_clusters) {
     if (out_of_time(out)) return;
     recognize_region(cluster_points(points, c), frame, out, depth + 1);
   }
+}
+
+std::vector<Cluster> Recognizer::unexplained_clusters(const PointCloud& points, const std::vector<char>& explained, Recognition& out) const {
+  const auto t = Clock::now();
+  std::vector<std::uint32_t> rest;
+  for (std::uint32_t i = 0; i < points.size(); ++i) {
+    if (!explained[i]) rest.push_back(i);
+  }
+  std::vector<Cluster> clusters = euclidean_clusters(points, rest, options_.segment.clusters);
+  out.times.split_ms += ms_since(t);
+  return clusters;
 }
 
 std::vector<char> Recognizer::explained_points(const Detection& detection, const PointCloud& points) const {

@@ -373,6 +373,8 @@ class Recognizer {
   void recognize_rest(const PointCloud& points, Detection detection, const Frame& frame, Recognition& out, int depth) const;
   // Which of `points` (camera frame) lie on the detected model's surface, within the verification tolerance.
   std::vector<char> explained_points(const Detection& detection, const PointCloud& points) const;
+  // The Euclidean clusters of the points `explained` leaves out (timed as splitting).
+  std::vector<Cluster> unexplained_clusters(const PointCloud& points, const std::vector<char>& explained, Recognition& out) const;
 
   std::shared_ptr<const ViewDatabase> db_owner_;  // empty-owned when the caller keeps the database
   const ViewDatabase& db_;
