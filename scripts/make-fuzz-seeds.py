@@ -93,7 +93,7 @@ for kind, doc in enumerate([cam, scene_cam, gt, gt_info, models, results, target
 
 # view database (fuzz_view_database): the first byte even = a payload the target wraps in a valid
 # header and checksum, odd = a whole file as written (header checks and the checksum itself).
-def vpdb_payload(objects, views, grid_cell_m=0.003, cells=()):
+def vpdb_payload(objects, views, grid_cell_m=0.003, cells=(), pair_table=None):
     def s(text):
         b = text.encode()
         return struct.pack("<I", len(b)) + b
@@ -104,6 +104,7 @@ def vpdb_payload(objects, views, grid_cell_m=0.003, cells=()):
     params = {"camera": {"fx": 525.0, "fy": 525.0, "cx": 319.5, "cy": 239.5, "width": 640, "height": 480},
               "subdivisions": 1, "distance_m": 1.0, "voxel_m": 0.003, "icp_voxel_m": 0.005, "normal_radius_m": 0.015,
               "drawn_mesh_error_m": 0.002, "grid_cell_m": grid_cell_m, "grid_margin_m": 0.04, "max_grid_bytes": 268435456,
+              "ppf": {"sample_fraction": 0.5, "angle_bins": 4, "normal_split_deg": 30.0}, "max_pair_table_bytes": 268435456,
               "vfh": {"normalize_bins": True, "normalize_distances": False, "size_component": True, "pcl_compatible": True}}
     out = s(json.dumps(params, separators=(",", ":"))) + struct.pack("<I", len(objects))
     for oid, name, verts, tris, model in objects:
@@ -114,6 +115,7 @@ def vpdb_payload(objects, views, grid_cell_m=0.003, cells=()):
         out += struct.pack("<I", 1) + struct.pack("<6d", 0, 0, 0, 0, 1, 0)  # axis z through the origin (interleaved)
         out += pts(verts) + struct.pack("<I", len(tris)) + b"".join(struct.pack("<3I", *t) for t in tris)  # drawing mesh
         out += struct.pack("<Q", len(cells)) + b"".join(struct.pack("<I", c) for c in cells)  # the ICP grid (none: filled later)
+        out += pair_table if pair_table else b"\x00"  # the point pair table (none: made on first use)
     out += struct.pack("<I", len(views))
     for obj, view_points in views:
         out += struct.pack("<I", obj) + struct.pack("<12d", 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0.5)
@@ -127,10 +129,21 @@ def vpdb_payload(objects, views, grid_cell_m=0.003, cells=()):
 square = [(0.0, 0.0, 0.0), (0.1, 0.0, 0.0), (0.1, 0.1, 0.0), (0.0, 0.1, 0.0)]
 payload = vpdb_payload([(1, "square", square, [(0, 1, 2), (0, 2, 3)], square)], [(0, square), (0, square[:3])])
 write("view_database", "square_payload", b"\x00" + payload)
-header = (b"VPDB\r\n\x1a\n" + struct.pack("<IIQI", 3, 0x01020304, len(payload), zlib.crc32(payload)) + b"\x00" * 4)
+header = (b"VPDB\r\n\x1a\n" + struct.pack("<IIQI", 4, 0x01020304, len(payload), zlib.crc32(payload)) + b"\x00" * 4)
 write("view_database", "square_file", b"\x01" + header + payload)
 write("view_database", "empty_payload", b"\x00" + vpdb_payload([], []))
 # With a stored ICP grid: 5 cm cells over the square and a 4 cm margin are 4 x 4 x 2 cells, each
 # holding one of its four points (index + 1).
 write("view_database", "grid_payload", b"\x00" + vpdb_payload([(1, "square", square, [(0, 1, 2), (0, 2, 3)], square)],
                                                                [(0, square)], grid_cell_m=0.05, cells=[1 + k % 4 for k in range(32)]))
+# With a stored pair table, in the shape the parameters above give (sample fraction 0.5: 3 distance
+# bins; 4 angle bins: 2 feature angle bins; 3 * 2^3 keys): two points, and the pair each way, by key.
+def u32s(values):
+    return struct.pack("<Q", len(values)) + b"".join(struct.pack("<I", v) for v in values)
+
+
+key_start = [0] * 5 + [2] * 20  # keys 0-3 empty, key 4 holds both pairs
+table = (b"\x01" + struct.pack("<ddid", 0.1, 0.5, 4, 30.0) + struct.pack("<I", 2) + struct.pack("<6f", 0, 0, 0, 0.05, 0, 0)
+         + struct.pack("<I", 2) + struct.pack("<6f", 0, 0, 1, 0, 0, 1) + u32s(key_start) + u32s([(0 << 14) | 100, (1 << 14) | 7000]))
+write("view_database", "pair_table_payload", b"\x00" + vpdb_payload([(1, "square", square, [(0, 1, 2), (0, 2, 3)], square)],
+                                                                     [(0, square)], pair_table=table))

@@ -32,14 +32,17 @@ void print_database(const fs::path& path, const ViewDatabase& db) {
              p.camera.cx, p.camera.cy);
   fmt::print("  describe:  voxel {} mm, ICP copy {} mm, normal radius {} mm, VFH {}\n", p.voxel_m * 1000, p.icp_voxel_m * 1000,
              p.describe.normals.radius_m * 1000, p.describe.vfh.pcl_compatible ? "PCL-compatible" : "corrected");
-  std::size_t drawn = 0, grids = 0;
+  std::size_t drawn = 0, grids = 0, tables = 0;
   for (const DatabaseObject& o : db.objects) {
     drawn += o.drawn_mesh.triangles.empty() ? 0 : 1;
     grids += o.nearest_cells.empty() ? 0 : 1;
+    tables += o.pair_table ? 1 : 0;
   }
   const std::size_t grid_bytes = stored_grid_bytes(db);
   fmt::print("  prepared:  {} of {} objects with a drawing mesh ({} mm), {} with a filled ICP grid ({} mm cells, {:.1f} MB)\n",
              drawn, db.objects.size(), p.drawn_mesh_error_m * 1000, grids, p.grid_cell_m * 1000, static_cast<double>(grid_bytes) / 1e6);
+  fmt::print("             {} with a point pair table (sampled at {} of the diameter, {} angle bins, {:.1f} MB)\n", tables,
+             p.ppf.sample_fraction, p.ppf.angle_bins, static_cast<double>(stored_pair_table_bytes(db)) / 1e6);
   fmt::print("  objects:   {}\n", db.objects.size());
   for (std::size_t o = 0; o < db.objects.size(); ++o) {
     std::size_t views = 0, points = 0;

@@ -58,6 +58,18 @@ class Writer {
     const auto* p = reinterpret_cast<const std::uint8_t*>(cells.data());
     bytes.insert(bytes.end(), p, p + cells.size() * sizeof(std::uint32_t));
   }
+  void put_pair_table(const PpfTable* t) {
+    put(static_cast<std::uint8_t>(t ? 1 : 0));
+    if (!t) return;
+    put(t->diameter_m);
+    put(t->sample_fraction);
+    put(static_cast<std::int32_t>(t->angle_bins));
+    put(t->normal_split_deg);
+    put_points(t->sampled.points);
+    put_points(t->sampled.normals);
+    put_cells(t->key_start);
+    put_cells(t->entries);
+  }
   std::vector<std::uint8_t> bytes;
 };
 
@@ -118,6 +130,26 @@ class Reader {
     pos_ += cells.size() * sizeof(std::uint32_t);
     return cells;
   }
+  std::shared_ptr<const PpfTable> get_pair_table() {
+    const auto present = get<std::uint8_t>();
+    if (present == 0) return nullptr;
+    if (present != 1) fail("an object's pair table flag is neither 0 nor 1");
+    auto t = std::make_shared<PpfTable>();
+    t->diameter_m = get<double>();
+    t->sample_fraction = get<double>();
+    t->angle_bins = get<std::int32_t>();
+    t->normal_split_deg = get<double>();
+    t->sampled.points = get_points();
+    t->sampled.normals = get_points();
+    t->key_start = get_cells();
+    t->entries = get_cells();
+    try {
+      check_ppf_table(*t);
+    } catch (const Error& e) {
+      fail(e.what());
+    }
+    return t;
+  }
   /// Fails unless `count` records of at least `min_bytes` each can still follow.
   void need_records(std::size_t count, std::size_t min_bytes) const {
     if (count > (bytes_.size() - pos_) / min_bytes) fail(fmt::format("says {} records but is too short for them", count));
@@ -146,6 +178,8 @@ nlohmann::json params_json(const DatabaseParams& p) {
           {"grid_cell_m", p.grid_cell_m},
           {"grid_margin_m", p.grid_margin_m},
           {"max_grid_bytes", p.max_grid_bytes},
+          {"ppf", {{"sample_fraction", p.ppf.sample_fraction}, {"angle_bins", p.ppf.angle_bins}, {"normal_split_deg", p.ppf.normal_split_deg}}},
+          {"max_pair_table_bytes", p.max_pair_table_bytes},
           {"vfh", {{"normalize_bins", p.describe.vfh.normalize_bins},
                    {"normalize_distances", p.describe.vfh.normalize_distances},
                    {"size_component", p.describe.vfh.size_component},
@@ -186,6 +220,20 @@ DatabaseParams params_from_json(const std::string& text, const Reader& r) {
       r.fail("build parameters are out of range (max_grid_bytes)");
     }
     p.max_grid_bytes = static_cast<std::size_t>(max_grid_bytes);
+    const double max_pair_table_bytes = j.at("max_pair_table_bytes").get<double>();
+    if (!(max_pair_table_bytes >= 0 && max_pair_table_bytes <= 1e15) || max_pair_table_bytes != std::floor(max_pair_table_bytes)) {
+      r.fail("build parameters are out of range (max_pair_table_bytes)");
+    }
+    p.max_pair_table_bytes = static_cast<std::size_t>(max_pair_table_bytes);
+    const auto& ppf = j.at("ppf");
+    p.ppf.sample_fraction = ppf.at("sample_fraction").get<double>();
+    p.ppf.angle_bins = whole(ppf.at("angle_bins"), 13440);
+    p.ppf.normal_split_deg = ppf.at("normal_split_deg").get<double>();
+    try {
+      check_ppf_options(p.ppf);
+    } catch (const Error& e) {
+      r.fail(fmt::format("build parameters are out of range ({})", e.what()));
+    }
     const auto& v = j.at("vfh");
     p.describe.vfh.normalize_bins = v.at("normalize_bins").get<bool>();
     p.describe.vfh.normalize_distances = v.at("normalize_distances").get<bool>();
@@ -230,6 +278,7 @@ std::vector<std::uint8_t> ViewDatabase::serialize() const {
       }
     w.put_mesh(o.drawn_mesh);
     w.put_cells(o.nearest_cells);
+    w.put_pair_table(o.pair_table.get());
   }
   w.put(static_cast<std::uint32_t>(views.size()));
   for (const auto& v : views) {
@@ -333,6 +382,7 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
     if (!o.nearest_cells.empty() && !NearestGrid::fits(o.model_points, db.params.grid_cell_m, db.params.grid_margin_m, o.nearest_cells)) {
       r.fail("an object's nearest-point grid does not fit its model points");
     }
+    o.pair_table = r.get_pair_table();
     db.objects.push_back(std::move(o));
   }
   const auto n_views = r.get<std::uint32_t>();
@@ -408,9 +458,11 @@ int add_captured_view(ViewDatabase& db, const PointCloud& cloud, const std::stri
   object.diameter_m = mesh_diameter(hull);
   // Its grid made again for the grown model, within what the database's other grids leave.
   object.nearest_cells = std::vector<std::uint32_t>();
-  const std::size_t others = stored_grid_bytes(db);
-  std::size_t grid_bytes_left = db.params.max_grid_bytes > others ? db.params.max_grid_bytes - others : 0;
-  prepare_object(object, db.params, grid_bytes_left);
+  object.pair_table.reset();
+  const auto less = [](std::size_t most, std::size_t taken) { return most > taken ? most - taken : 0; };
+  PreparedBytesLeft left{less(db.params.max_grid_bytes, stored_grid_bytes(db)),
+                         less(db.params.max_pair_table_bytes, stored_pair_table_bytes(db))};
+  prepare_object(object, db.params, left);
   return object.id;
 }
 
@@ -459,13 +511,30 @@ void check_viewable(const std::string& name, const BoundingBox& box, const Datab
 
 }  // namespace
 
-void prepare_object(DatabaseObject& object, const DatabaseParams& params, std::size_t& grid_bytes_left) {
+void prepare_object(DatabaseObject& object, const DatabaseParams& params, PreparedBytesLeft& left) {
   object.drawn_mesh = object.mesh.triangles.empty() ? TriangleMesh{} : simplify_for_drawing(object.mesh, params.drawn_mesh_error_m);
   object.nearest_cells = std::vector<std::uint32_t>();
   const std::size_t cells = NearestGrid::cell_count(object.model_points, params.grid_cell_m, params.grid_margin_m);
-  if (cells == 0 || cells > grid_bytes_left / sizeof(std::uint32_t)) return;  // (a scan of a whole room: too many)
-  grid_bytes_left -= cells * sizeof(std::uint32_t);
-  object.nearest_cells = filled_nearest_cells(object.model_points, params.grid_cell_m, params.grid_margin_m);
+  if (cells > 0 && cells <= left.grids / sizeof(std::uint32_t)) {  // (a scan of a whole room: too many)
+    left.grids -= cells * sizeof(std::uint32_t);
+    object.nearest_cells = filled_nearest_cells(object.model_points, params.grid_cell_m, params.grid_margin_m);
+  }
+  object.pair_table.reset();
+  if (left.pair_tables == 0) return;
+  try {
+    auto table = std::make_shared<const PpfTable>(make_ppf_table(object.model_points, object.model_normals, object.diameter_m, params.ppf));
+    if (table->bytes() > left.pair_tables) return;
+    left.pair_tables -= table->bytes();
+    object.pair_table = std::move(table);
+  } catch (const Error&) {
+    // A model of fewer than two oriented points gives no votes; the recognizer finds that again.
+  }
+}
+
+std::size_t stored_pair_table_bytes(const ViewDatabase& db) {
+  std::size_t bytes = 0;
+  for (const DatabaseObject& o : db.objects) bytes += o.pair_table ? o.pair_table->bytes() : 0;
+  return bytes;
 }
 
 std::size_t stored_grid_bytes(const ViewDatabase& db) {
@@ -485,7 +554,8 @@ ViewDatabase build_view_database(std::span<const ObjectModel> objects, const Dat
   }
   ViewDatabase db;
   db.params = params;
-  std::size_t grid_bytes_left = params.max_grid_bytes;
+  check_ppf_options(params.ppf);
+  PreparedBytesLeft left{params.max_grid_bytes, params.max_pair_table_bytes};
   for (std::size_t o = 0; o < objects.size(); ++o) {
     const TriangleMesh& mesh = objects[o].mesh;
     if (mesh.triangles.empty()) throw Error(fmt::format("db build: object '{}' has no triangles", objects[o].name));
@@ -526,7 +596,7 @@ ViewDatabase build_view_database(std::span<const ObjectModel> objects, const Dat
     PointCloud model_grid = voxel_downsample(model, params.voxel_m);
     db.objects.back().model_points = std::move(model_grid.points);
     db.objects.back().model_normals = std::move(model_grid.normals);
-    prepare_object(db.objects.back(), params, grid_bytes_left);
+    prepare_object(db.objects.back(), params, left);
     std::size_t usable = 0;
     for (auto& e : entries) {
       if (e.described_points < 3) continue;  // a view that sees nothing is no use

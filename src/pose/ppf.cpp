@@ -29,7 +29,7 @@ float pair_alpha(const Transform& T_local, const Eigen::Vector3f& p2) {
 
 // Angles about the normal in fine units: a whole number of them in every alpha bin, so that a
 // vote's bin is integer arithmetic (most of the time goes to votes).
-constexpr std::uint32_t kAlphaUnits = 30 * 64 * 7;  // divisible by 30, 40, 45, 60, 64, ...
+constexpr std::uint32_t kAlphaUnits = PpfTable::kAlphaUnits;
 std::uint32_t alpha_units(float alpha) {
   double a = alpha < 0 ? alpha + 2 * kPi : alpha;
   return std::min(kAlphaUnits - 1, static_cast<std::uint32_t>(a / (2 * kPi) * kAlphaUnits));
@@ -63,6 +63,20 @@ int bins_of(float x_in_steps, int bins, double spread, int out[2]) {
   if (frac < spread && b > 0) return out[1] = b - 1, 2;
   if (frac > 1.0 - spread && b < bins - 1) return out[1] = b + 1, 2;
   return 1;
+}
+
+// The table's layout: distance bins of one sampling step up to the diameter, and angle bins of
+// 2 pi / angle_bins over [0, pi].
+int distance_bins_of(double sample_fraction) { return static_cast<int>(std::floor(1.0 / sample_fraction)) + 1; }
+int feature_angle_bins_of(int angle_bins) { return static_cast<int>(std::ceil(angle_bins / 2.0 - 1e-9)); }
+std::size_t key_of(int feature_angle_bins, int d, int a1, int a2, int a3) {
+  const auto A = static_cast<std::size_t>(feature_angle_bins);
+  return ((static_cast<std::size_t>(d) * A + static_cast<std::size_t>(a1)) * A + static_cast<std::size_t>(a2)) * A +
+         static_cast<std::size_t>(a3);
+}
+std::size_t keys_of(double sample_fraction, int angle_bins) {
+  const int A = feature_angle_bins_of(angle_bins);
+  return key_of(A, distance_bins_of(sample_fraction) - 1, A - 1, A - 1, A - 1) + 1;
 }
 
 }  // namespace
@@ -126,11 +140,7 @@ OrientedPoints ppf_sample(std::span<const Eigen::Vector3f> points, std::span<con
   return out;
 }
 
-std::size_t PpfModel::key(int d, int a1, int a2, int a3) const {
-  const auto A = static_cast<std::size_t>(feature_angle_bins_);
-  return ((static_cast<std::size_t>(d) * A + static_cast<std::size_t>(a1)) * A + static_cast<std::size_t>(a2)) * A +
-         static_cast<std::size_t>(a3);
-}
+std::size_t PpfModel::key(int d, int a1, int a2, int a3) const { return key_of(feature_angle_bins_, d, a1, a2, a3); }
 
 void check_ppf_options(const PpfOptions& options) {
   if (!(options.sample_fraction > 0 && options.sample_fraction < 1) || options.angle_bins < 4 ||
@@ -139,49 +149,117 @@ void check_ppf_options(const PpfOptions& options) {
   }
 }
 
-PpfModel::PpfModel(std::span<const Eigen::Vector3f> points, std::span<const Eigen::Vector3f> normals, double diameter_m,
-                   const PpfOptions& options)
-    : options_(options), diameter_m_(diameter_m) {
+std::size_t PpfTable::bytes() const {
+  return sampled.size() * 2 * sizeof(Eigen::Vector3f) + (key_start.size() + entries.size()) * sizeof(std::uint32_t);
+}
+
+bool PpfTable::made_with(const PpfOptions& options) const {
+  return sample_fraction == options.sample_fraction && angle_bins == options.angle_bins &&
+         normal_split_deg == options.normal_split_deg;
+}
+
+PpfTable make_ppf_table(std::span<const Eigen::Vector3f> points, std::span<const Eigen::Vector3f> normals, double diameter_m,
+                        const PpfOptions& options) {
   if (!(diameter_m > 0) || !std::isfinite(diameter_m)) throw Error("ppf: the object's diameter must be positive");
   check_ppf_options(options);
-  step_m_ = static_cast<float>(options.sample_fraction * diameter_m);
-  distance_bins_ = static_cast<int>(std::floor(1.0 / options.sample_fraction)) + 1;
+  PpfTable t;
+  t.diameter_m = diameter_m;
+  t.sample_fraction = options.sample_fraction;
+  t.angle_bins = options.angle_bins;
+  t.normal_split_deg = options.normal_split_deg;
+  const auto step_m = static_cast<float>(options.sample_fraction * diameter_m);
+  const int distance_bins = distance_bins_of(options.sample_fraction);
+  const int feature_angle_bins = feature_angle_bins_of(options.angle_bins);
   const double angle_step = 2 * kPi / options.angle_bins;
-  phi_bin_.resize(2 * kAlphaUnits);
-  for (std::uint32_t x = 0; x < 2 * kAlphaUnits; ++x) {
-    phi_bin_[x] = static_cast<std::uint16_t>((x % kAlphaUnits) / (kAlphaUnits / static_cast<std::uint32_t>(options.angle_bins)));
-  }
-  feature_angle_bins_ = static_cast<int>(std::ceil(kPi / angle_step - 1e-9));
-  sampled_ = ppf_sample(points, normals, step_m_, options.normal_split_deg);
-  if (sampled_.size() < 2) throw Error("ppf: the model has fewer than two oriented points");
-  const std::size_t n = sampled_.size();
-  T_local_model_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) T_local_model_[i] = local_frame(sampled_.points[i], sampled_.normals[i]);
+  t.sampled = ppf_sample(points, normals, step_m, options.normal_split_deg);
+  const std::size_t n = t.sampled.size();
+  if (n < 2) throw Error("ppf: the model has fewer than two oriented points");
+  if (n > PpfTable::kMaxPoints) throw Error("ppf: the model samples to too many points for a pair table (raise sample_fraction)");
 
   // Every ordered pair within the diameter, keyed; counted first, then placed (one pass each).
-  const std::size_t keys = key(distance_bins_ - 1, feature_angle_bins_ - 1, feature_angle_bins_ - 1, feature_angle_bins_ - 1) + 1;
-  std::vector<std::uint32_t> pair_key;
-  std::vector<Entry> pair_entry;
+  std::vector<std::uint32_t> pair_key, pair_entry;
   const float max_d = static_cast<float>(diameter_m);
   for (std::size_t i = 0; i < n; ++i) {
+    const Transform T_local_model = local_frame(t.sampled.points[i], t.sampled.normals[i]);
     for (std::size_t j = 0; j < n; ++j) {
       Feature f;
-      if (i == j || !pair_feature(sampled_.points[i], sampled_.normals[i], sampled_.points[j], sampled_.normals[j], f) ||
+      if (i == j || !pair_feature(t.sampled.points[i], t.sampled.normals[i], t.sampled.points[j], t.sampled.normals[j], f) ||
           f.distance > max_d) {
         continue;
       }
-      const int d = std::min(distance_bins_ - 1, static_cast<int>(f.distance / step_m_));
-      const auto a = [&](float x) { return std::min(feature_angle_bins_ - 1, static_cast<int>(x / angle_step)); };
-      pair_key.push_back(static_cast<std::uint32_t>(key(d, a(f.a1), a(f.a2), a(f.a3))));
-      pair_entry.push_back({static_cast<std::uint32_t>(i), alpha_units(pair_alpha(T_local_model_[i], sampled_.points[j]))});
+      const int d = std::min(distance_bins - 1, static_cast<int>(f.distance / step_m));
+      const auto a = [&](float x) { return std::min(feature_angle_bins - 1, static_cast<int>(x / angle_step)); };
+      pair_key.push_back(static_cast<std::uint32_t>(key_of(feature_angle_bins, d, a(f.a1), a(f.a2), a(f.a3))));
+      pair_entry.push_back(PpfTable::entry(static_cast<std::uint32_t>(i), alpha_units(pair_alpha(T_local_model, t.sampled.points[j]))));
     }
   }
-  key_start_.assign(keys + 1, 0);
-  for (const std::uint32_t k : pair_key) ++key_start_[k + 1];
-  std::partial_sum(key_start_.begin(), key_start_.end(), key_start_.begin());
-  entries_.resize(pair_entry.size());
-  std::vector<std::uint32_t> fill(key_start_.begin(), key_start_.end() - 1);
-  for (std::size_t p = 0; p < pair_entry.size(); ++p) entries_[fill[pair_key[p]]++] = pair_entry[p];
+  t.key_start.assign(keys_of(options.sample_fraction, options.angle_bins) + 1, 0);
+  for (const std::uint32_t k : pair_key) ++t.key_start[k + 1];
+  std::partial_sum(t.key_start.begin(), t.key_start.end(), t.key_start.begin());
+  t.entries.resize(pair_entry.size());
+  std::vector<std::uint32_t> fill(t.key_start.begin(), t.key_start.end() - 1);
+  for (std::size_t p = 0; p < pair_entry.size(); ++p) t.entries[fill[pair_key[p]]++] = pair_entry[p];
+  return t;
+}
+
+void check_ppf_table(const PpfTable& t) {
+  const auto fail = [](const char* why) { throw Error(std::string("ppf: a pair table ") + why); };
+  if (!(t.diameter_m > 0) || !std::isfinite(t.diameter_m)) fail("has no positive diameter");
+  PpfOptions shape;
+  shape.sample_fraction = t.sample_fraction;
+  shape.angle_bins = t.angle_bins;
+  if (!(t.sample_fraction >= 1e-3) || !std::isfinite(t.normal_split_deg)) fail("has bad options");
+  try {
+    check_ppf_options(shape);
+  } catch (const Error&) {
+    fail("has bad options");
+  }
+  const std::size_t n = t.sampled.size();
+  if (t.sampled.normals.size() != n || n < 2 || n > PpfTable::kMaxPoints) fail("has a bad number of points or normals");
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!t.sampled.points[i].allFinite() || !(std::abs(t.sampled.normals[i].norm() - 1.0f) < 1e-3f)) fail("has a point or normal that is not finite or not unit");
+  }
+  if (t.key_start.size() != keys_of(t.sample_fraction, t.angle_bins) + 1 || t.key_start.front() != 0 ||
+      t.key_start.back() != t.entries.size()) {
+    fail("has keys that do not match its options or its pairs");
+  }
+  if (!std::is_sorted(t.key_start.begin(), t.key_start.end())) fail("has keys out of order");
+  const auto points = static_cast<std::uint32_t>(n);
+  constexpr std::uint32_t alpha_mask = (std::uint32_t{1} << PpfTable::kAlphaBits) - 1;
+  for (const std::uint32_t e : t.entries) {
+    if ((e >> PpfTable::kAlphaBits) >= points) fail("has a pair naming a point that does not exist");
+    if ((e & alpha_mask) >= kAlphaUnits) fail("has a pair whose angle is out of range");
+  }
+}
+
+PpfModel::PpfModel(std::span<const Eigen::Vector3f> points, std::span<const Eigen::Vector3f> normals, double diameter_m,
+                   const PpfOptions& options)
+    : table_(std::make_shared<const PpfTable>(make_ppf_table(points, normals, diameter_m, options))), options_(options) {
+  prepare();
+}
+
+PpfModel::PpfModel(std::shared_ptr<const PpfTable> table, const PpfOptions& options) : table_(std::move(table)), options_(options) {
+  if (!table_) throw Error("ppf: no pair table given");
+  check_ppf_table(*table_);
+  check_ppf_options(options);
+  prepare();
+}
+
+void PpfModel::prepare() {
+  const PpfTable& t = *table_;
+  // The table's shape holds where the options differ from it.
+  options_.sample_fraction = t.sample_fraction;
+  options_.angle_bins = t.angle_bins;
+  options_.normal_split_deg = t.normal_split_deg;
+  step_m_ = static_cast<float>(t.sample_fraction * t.diameter_m);
+  distance_bins_ = distance_bins_of(t.sample_fraction);
+  feature_angle_bins_ = feature_angle_bins_of(t.angle_bins);
+  phi_bin_.resize(2 * kAlphaUnits);
+  for (std::uint32_t x = 0; x < 2 * kAlphaUnits; ++x) {
+    phi_bin_[x] = static_cast<std::uint16_t>((x % kAlphaUnits) / (kAlphaUnits / static_cast<std::uint32_t>(t.angle_bins)));
+  }
+  T_local_model_.resize(t.sampled.size());
+  for (std::size_t i = 0; i < t.sampled.size(); ++i) T_local_model_[i] = local_frame(t.sampled.points[i], t.sampled.normals[i]);
 }
 
 std::vector<PpfHypothesis> PpfModel::hypotheses(const OrientedPoints& scene) const {
@@ -197,9 +275,13 @@ std::vector<PpfHypothesis> PpfModel::hypotheses(const OrientedPoints& scene) con
     std::uint32_t votes = 0;
   };
   std::vector<Peak> peaks(references);
-  const float radius = static_cast<float>(diameter_m_);
-  const std::size_t model_points = sampled_.size();
-  const auto max_bucket = static_cast<std::uint32_t>(std::max(1.0, options_.max_bucket_per_point * static_cast<double>(sampled_.size())));
+  const PpfTable& table = *table_;
+  const float radius = static_cast<float>(table.diameter_m);
+  const std::size_t model_points = table.sampled.size();
+  const auto max_bucket = static_cast<std::uint32_t>(std::max(1.0, options_.max_bucket_per_point * static_cast<double>(model_points)));
+  const std::uint32_t* key_start = table.key_start.data();
+  const std::uint32_t* entries = table.entries.data();
+  constexpr std::uint32_t alpha_mask = (std::uint32_t{1} << PpfTable::kAlphaBits) - 1;
 
 #pragma omp parallel
   {
@@ -229,11 +311,11 @@ std::vector<PpfHypothesis> PpfModel::hypotheses(const OrientedPoints& scene) con
             for (int k = 0; k < n2b; ++k)
               for (int l = 0; l < n3b; ++l) {
                 const std::size_t kk = key(d[i], a1[j], a2[k], a3[l]);
-                if (key_start_[kk + 1] - key_start_[kk] > max_bucket) continue;
-                for (std::uint32_t e = key_start_[kk]; e < key_start_[kk + 1]; ++e) {
-                  const Entry& entry = entries_[e];
+                if (key_start[kk + 1] - key_start[kk] > max_bucket) continue;
+                for (std::uint32_t e = key_start[kk]; e < key_start[kk + 1]; ++e) {
+                  const std::uint32_t point = entries[e] >> PpfTable::kAlphaBits, alpha = entries[e] & alpha_mask;
                   // phi = alpha_scene - alpha_model in fine units, wrapped into [0, 2 pi), and its bin.
-                  const std::size_t slot = entry.point * static_cast<std::size_t>(bins) + phi_bin_[alpha_scene_fine + kAlphaUnits - entry.alpha];
+                  const std::size_t slot = point * static_cast<std::size_t>(bins) + phi_bin_[alpha_scene_fine + kAlphaUnits - alpha];
                   const std::uint32_t v = ++votes[slot];
                   if (v == 1) touched.push_back(static_cast<std::uint32_t>(slot));
                   if (v > best || (v == best && slot < best_slot)) best = v, best_slot = static_cast<std::uint32_t>(slot);
@@ -262,7 +344,7 @@ std::vector<PpfHypothesis> PpfModel::hypotheses(const OrientedPoints& scene) con
     std::size_t poses = 0;
   };
   std::vector<PoseCluster> clusters;
-  const double max_t = options_.cluster_distance_fraction * diameter_m_;
+  const double max_t = options_.cluster_distance_fraction * table.diameter_m;
   const double max_angle = options_.cluster_angle_deg * kPi / 180.0;
   for (const std::size_t i : order) {
     const Peak& p = peaks[i];

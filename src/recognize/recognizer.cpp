@@ -122,8 +122,13 @@ const PpfModel* Recognizer::pair_table(std::uint32_t object) const {
     const DatabaseObject& o = db_.objects[object];
     // (The options were checked when the recognizer was made: what fails here is the model, which
     // then gives no votes, once, rather than an error in every region.)
+    // The database's table where it was made as these options would make it.
     try {
-      p.ppf = std::make_unique<PpfModel>(o.model_points, o.model_normals, o.diameter_m, options_.match.ppf);
+      if (o.pair_table && o.pair_table->made_with(options_.match.ppf)) {
+        p.ppf = std::make_unique<PpfModel>(o.pair_table, options_.match.ppf);
+      } else {
+        p.ppf = std::make_unique<PpfModel>(o.model_points, o.model_normals, o.diameter_m, options_.match.ppf);
+      }
     } catch (const Error&) {
       p.ppf.reset();
     }
@@ -565,7 +570,7 @@ std::vector<Recognizer::Candidate> Recognizer::pair_vote_candidates(const Region
     if (!found) continue;
     const PpfModel& table = *found;
     // The region sampled as the object's table was, at its own step (a share of its diameter).
-    const OrientedPoints scene = ppf_sample(d.cloud.points, d.cloud.normals, table.sample_step_m(), table.options().normal_split_deg);
+    const OrientedPoints scene = ppf_sample(d.cloud.points, d.cloud.normals, table.sample_step_m(), table.normal_split_deg());
     for (const PpfHypothesis& h : table.hypotheses(scene)) {
       const double fit = coarse_fit_facing(region.icp_source, region_grid, table.sampled().points, table.sampled().normals,
                                            prepared(o).occupancy, h.T_camera_object, options_.match.fit_points);

@@ -169,6 +169,43 @@ TEST(ViewDatabaseTest, GridsAreStoredWithinTheirByteLimitAndDamagedOnesAreRefuse
   expect_error([&] { ViewDatabase::deserialize(bad.serialize(), "grid.vpdb"); }, "does not fit its model points");
 }
 
+TEST(ViewDatabaseTest, PairTablesAreStoredWithinTheirByteLimitAndReadBackWhole) {
+  const ViewDatabase& db = small_db();
+  ASSERT_TRUE(db.objects[0].pair_table && db.objects[1].pair_table);
+  const ViewDatabase back = ViewDatabase::deserialize(db.serialize(), "tables.vpdb");
+  for (std::size_t o = 0; o < 2; ++o) {
+    const PpfTable &a = *db.objects[o].pair_table, &b = *back.objects[o].pair_table;
+    EXPECT_EQ(a.entries, b.entries);
+    EXPECT_EQ(a.key_start, b.key_start);
+    EXPECT_EQ(a.sampled.points, b.sampled.points);
+    EXPECT_EQ(a.diameter_m, b.diameter_m);
+    EXPECT_TRUE(b.made_with(db.params.ppf));
+  }
+  EXPECT_EQ(stored_pair_table_bytes(back), db.objects[0].pair_table->bytes() + db.objects[1].pair_table->bytes());
+  // Room for the smaller table alone: only it is stored; none at 0. The recognizer makes the rest.
+  const std::vector<ObjectModel> models = {{1, "jug", make_jug()}, {5, "can", make_can()}};
+  DatabaseParams p = db.params;
+  const std::size_t jug = db.objects[0].pair_table->bytes(), can = db.objects[1].pair_table->bytes();
+  ASSERT_NE(jug, can);
+  p.max_pair_table_bytes = std::min(jug, can);
+  const ViewDatabase limited = build_view_database(models, p);
+  const std::size_t larger = jug > can ? 0 : 1;
+  EXPECT_FALSE(limited.objects[larger].pair_table);
+  EXPECT_TRUE(limited.objects[1 - larger].pair_table);
+  EXPECT_EQ(ViewDatabase::deserialize(limited.serialize(), "limit.vpdb").params.max_pair_table_bytes, p.max_pair_table_bytes);
+  p.max_pair_table_bytes = 0;
+  EXPECT_EQ(stored_pair_table_bytes(build_view_database(models, p)), 0u);
+  // Bad shaping options are refused before anything is rendered; a damaged table when read.
+  p.ppf.angle_bins = 11;
+  expect_error([&] { build_view_database(models, p); }, "ppf: bad options");
+  ViewDatabase bad = small_db();
+  auto table = std::make_shared<PpfTable>(*bad.objects[1].pair_table);
+  table->entries.back() = PpfTable::entry(static_cast<std::uint32_t>(table->sampled.size()), 5);
+  bad.objects[1].pair_table = table;
+  expect_error([&] { ViewDatabase::deserialize(bad.serialize(), "table.vpdb"); },
+               "table.vpdb: ppf: a pair table has a pair naming a point that does not exist");
+}
+
 TEST(ViewDatabaseTest, DamagedOrForeignFilesAreRefusedWithAClearError) {
   const std::vector<std::uint8_t> good = small_db().serialize();
   auto with = [&](auto&& edit) {
@@ -180,7 +217,7 @@ TEST(ViewDatabaseTest, DamagedOrForeignFilesAreRefusedWithAClearError) {
   expect_error([&] { ViewDatabase::deserialize(test::to_bytes("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\n"), "a.vpdb"); },
                "not a viewpose view database");
   expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { b[8] = 2; }), "v2.vpdb"); },
-               "database format version 2, this viewpose reads version 3; rebuild it");
+               "database format version 2, this viewpose reads version 4; rebuild it");
   expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { std::swap(b[12], b[15]); }), "be.vpdb"); }, "byte order");
   expect_error([&] { ViewDatabase::deserialize(std::span(good.data(), good.size() / 2), "half.vpdb"); }, "truncated or padded");
   expect_error([&] { ViewDatabase::deserialize(with([](auto& b) { b[b.size() / 2] ^= 0x40; }), "flip.vpdb"); },
@@ -208,6 +245,12 @@ TEST(ViewDatabaseTest, TheFuzzersSeedFileIsADatabaseAndItsDamagedValuesAreRefuse
   const ViewDatabase with_grid = ViewDatabase::deserialize(ViewDatabase::file_from_payload(std::span(grid_seed).subspan(1)), "grid");
   ASSERT_EQ(with_grid.objects.size(), 1u);
   EXPECT_EQ(with_grid.objects[0].nearest_cells.size(), 32u);
+  // And the seed with a stored pair table (two points, their two pairs) with it.
+  const auto table_seed = read_file_bytes(std::filesystem::path(VIEWPOSE_SOURCE_DIR) / "fuzz/corpus/view_database/pair_table_payload");
+  const ViewDatabase with_table = ViewDatabase::deserialize(ViewDatabase::file_from_payload(std::span(table_seed).subspan(1)), "table");
+  ASSERT_TRUE(with_table.objects[0].pair_table);
+  EXPECT_EQ(with_table.objects[0].pair_table->entries.size(), 2u);
+  EXPECT_FALSE(with_grid.objects[0].pair_table);
   // A value no build could write, with the checksum made right again: refused, by name.
   // The script's header is the library's.
   const std::vector<std::uint8_t> payload(file.begin() + 32, file.end());

@@ -121,6 +121,58 @@ TEST(Ppf, TheJugHalfHiddenBesideACanIsAmongTheFirstHypotheses) {
       << rotation_deg(h[0].T_camera_object, T_camera_jug) << " deg, " << h[0].votes << " votes";
 }
 
+TEST(Ppf, AStoredTableVotesAsTheTableMadeAgainAndADamagedOneIsRefused) {
+  // The database's table (made with it) is the table the model's points make now, and votes the
+  // same: a scene of the model's own points gives the same hypotheses from either.
+  const DatabaseObject& o = jug();
+  ASSERT_TRUE(o.pair_table) << "DatabaseParams::max_pair_table_bytes lets the jug's table be stored";
+  const PpfModel made(o.model_points, o.model_normals, o.diameter_m);
+  EXPECT_EQ(o.pair_table->entries, made.table().entries);
+  EXPECT_EQ(o.pair_table->key_start, made.table().key_start);
+  EXPECT_TRUE(o.pair_table->made_with(PpfOptions{}));
+  PpfOptions coarser;
+  coarser.sample_fraction = 0.06;
+  EXPECT_FALSE(o.pair_table->made_with(coarser));
+  const PpfModel stored(o.pair_table);
+  EXPECT_EQ(stored.sample_step_m(), made.sample_step_m());
+  const Transform T = make_transform(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix(), {0, 0.1, 1.0});
+  std::vector<Eigen::Vector3f> p, n;
+  for (std::size_t i = 0; i < o.model_points.size(); ++i) {
+    p.push_back((T * o.model_points[i].cast<double>()).cast<float>());
+    n.push_back((T.linear() * o.model_normals[i].cast<double>()).cast<float>());
+  }
+  const OrientedPoints scene = ppf_sample(p, n, made.sample_step_m(), made.normal_split_deg());
+  const std::vector<PpfHypothesis> a = made.hypotheses(scene), b = stored.hypotheses(scene);
+  ASSERT_FALSE(a.empty());
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_TRUE(a[i].T_camera_object.isApprox(b[i].T_camera_object, 0));
+    EXPECT_EQ(a[i].votes, b[i].votes);
+  }
+  // The options that act when votes are cast are the caller's; the table's shape is its own.
+  PpfOptions fewer;
+  fewer.max_hypotheses = 2;
+  fewer.sample_fraction = 0.06;
+  const PpfModel few(o.pair_table, fewer);
+  EXPECT_EQ(few.hypotheses(scene).size(), 2u);
+  EXPECT_EQ(few.sample_step_m(), made.sample_step_m());
+  // Damage that would make votes read out of bounds is refused, by name.
+  const auto damaged = [&](auto&& edit) {
+    auto t = std::make_shared<PpfTable>(*o.pair_table);
+    edit(*t);
+    return [t] { check_ppf_table(*t); };
+  };
+  test::expect_error(damaged([](PpfTable& t) { t.entries[7] = PpfTable::entry(static_cast<std::uint32_t>(t.sampled.size()), 0); }),
+                     "a pair naming a point that does not exist");
+  test::expect_error(damaged([](PpfTable& t) { t.entries[9] = PpfTable::entry(0, PpfTable::kAlphaUnits); }), "angle is out of range");
+  test::expect_error(damaged([](PpfTable& t) { std::swap(t.key_start[1000], t.key_start[60000]); }), "keys out of order");
+  test::expect_error(damaged([](PpfTable& t) { t.key_start.pop_back(); }), "keys that do not match");
+  test::expect_error(damaged([](PpfTable& t) { t.angle_bins = 11; }), "bad options");
+  test::expect_error(damaged([](PpfTable& t) { t.sampled.normals.pop_back(); }), "number of points or normals");
+  test::expect_error(damaged([](PpfTable& t) { t.sampled.normals[3] *= 2.0f; }), "not finite or not unit");
+  EXPECT_THROW(PpfModel(std::shared_ptr<const PpfTable>()), Error);
+}
+
 TEST(Ppf, BadModelsAndOptionsAreRefusedInOneLine) {
   const std::vector<Eigen::Vector3f> one = {{0, 0, 0}}, up = {{0, 0, 1}};
   EXPECT_THROW(PpfModel(one, up, 0.1), Error);

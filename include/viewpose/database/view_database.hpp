@@ -16,6 +16,7 @@
 #include "viewpose/core/symmetry.hpp"
 #include "viewpose/core/transform.hpp"
 #include "viewpose/describe/describe.hpp"
+#include "viewpose/pose/ppf.hpp"
 
 namespace viewpose {
 
@@ -35,6 +36,9 @@ struct DatabaseObject {
   /// ICP's nearest-point grid over `model_points`, every cell filled (NearestGrid::cells(),
   /// DatabaseParams::grid_cell_m and grid_margin_m).
   std::vector<std::uint32_t> nearest_cells;
+  /// Point pair votes' table of `model_points` (make_ppf_table, DatabaseParams::ppf); null where
+  /// not stored. About 0.1 s to make and 3 MB for an object of 20 cm.
+  std::shared_ptr<const PpfTable> pair_table;
 };
 
 struct ViewEntry {
@@ -65,12 +69,18 @@ struct DatabaseParams {
   /// many bytes of grids in all (a few MB an object; a large database prepares the rest as scenes
   /// suggest them).
   std::size_t max_grid_bytes = std::size_t{256} << 20;
+  /// The pair tables' shape (sample_fraction, angle_bins, normal_split_deg; the other options act
+  /// when votes are cast): RecognizerOptions::match.ppf.
+  PpfOptions ppf{};
+  /// Pair tables are stored for the objects, in order, each that still fits within this many
+  /// bytes of tables in all; 0 stores none. The recognizer makes the rest on first use.
+  std::size_t max_pair_table_bytes = std::size_t{256} << 20;
 };
 
 struct ViewDatabase {
   // 2: objects carry their symmetries. 3: objects carry a drawing mesh and a filled ICP grid; views
-  // keep only their ICP points.
-  static constexpr std::uint32_t kFormatVersion = 3;
+  // keep only their ICP points. 4: objects carry their point pair table.
+  static constexpr std::uint32_t kFormatVersion = 4;
   DatabaseParams params;
   std::vector<DatabaseObject> objects;
   std::vector<ViewEntry> views;
@@ -109,8 +119,17 @@ ViewEntry describe_view(const DepthImage& depth, const Transform& T_view_object,
 /// The bytes of the nearest-point grids `db` stores (DatabaseObject::nearest_cells).
 std::size_t stored_grid_bytes(const ViewDatabase& db);
 
-/// Makes an object's prepared data (DatabaseObject::drawn_mesh, nearest_cells) as `params` says;
-/// `grid_bytes_left` is what DatabaseParams::max_grid_bytes still allows, less what this grid takes.
-void prepare_object(DatabaseObject& object, const DatabaseParams& params, std::size_t& grid_bytes_left);
+/// The bytes of the pair tables `db` stores (DatabaseObject::pair_table).
+std::size_t stored_pair_table_bytes(const ViewDatabase& db);
+
+/// What DatabaseParams' byte limits still allow, less what each prepared object took.
+struct PreparedBytesLeft {
+  std::size_t grids = 0;
+  std::size_t pair_tables = 0;
+};
+
+/// Makes an object's prepared data (DatabaseObject::drawn_mesh, nearest_cells, pair_table) as
+/// `params` says, each where `left` still allows it, and takes what they hold from `left`.
+void prepare_object(DatabaseObject& object, const DatabaseParams& params, PreparedBytesLeft& left);
 
 }  // namespace viewpose

@@ -15,6 +15,7 @@
 // of a reference point's votes is a pose; poses from all reference points are clustered, and the
 // clusters with the most votes are the hypotheses.
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -70,40 +71,77 @@ struct PpfHypothesis {
   std::size_t poses = 0;     ///< reference points whose peak fell into this cluster
 };
 
-/// One object's pair table: every ordered pair of its sampled points no farther apart than its
-/// diameter, by quantized feature, with the model point and the pair's angle about its normal.
+/// One object's pair table, as plain data that the view database stores (made once, with the
+/// database, rather than in the first frame that asks for votes: about 0.1 s an object). Every
+/// ordered pair of the object's sampled points no farther apart than its diameter, by quantized
+/// feature, with the pair's first point and its angle about that point's normal.
+struct PpfTable {
+  // What shaped the table (PpfOptions' sample_fraction, angle_bins and normal_split_deg); the
+  // other options act when votes are cast, and may differ from one recognizer to another.
+  double diameter_m = 0;
+  double sample_fraction = 0;
+  int angle_bins = 0;
+  double normal_split_deg = 0;
+  OrientedPoints sampled;  ///< object frame
+  std::vector<std::uint32_t> key_start;  ///< entries of key k: [key_start[k], key_start[k + 1])
+  /// A pair: its first point's index into `sampled` shifted left by kAlphaBits, or'd with its
+  /// angle in units of 2 pi / kAlphaUnits. One word a pair: the tables are most of the votes'
+  /// memory traffic and of a database's bytes.
+  std::vector<std::uint32_t> entries;
+
+  static constexpr std::uint32_t kAlphaUnits = 30 * 64 * 7;  ///< 13440: divisible by 30, 40, 45, 60, 64, ...
+  static constexpr int kAlphaBits = 14;  ///< 2^14 > kAlphaUnits
+  static constexpr std::uint32_t kMaxPoints = std::uint32_t{1} << (32 - kAlphaBits);  ///< 262144 sampled points at most
+  static constexpr std::uint32_t entry(std::uint32_t point, std::uint32_t alpha) { return point << kAlphaBits | alpha; }
+  bool empty() const { return entries.empty(); }
+  std::size_t bytes() const;  ///< what it holds, about what it takes in a file
+  /// Whether it was made with these shaping options (and so serves a recognizer that has them).
+  bool made_with(const PpfOptions& options) const;
+};
+
+/// Makes the pair table of an object from `points` and outward unit `normals` of its surface
+/// (object frame, metres). Throws Error (one line) on bad options or a model of fewer than two
+/// oriented points.
+PpfTable make_ppf_table(std::span<const Eigen::Vector3f> points, std::span<const Eigen::Vector3f> normals, double diameter_m,
+                        const PpfOptions& options = {});
+
+/// Throws Error (one line, naming what is wrong) unless `table` is one make_ppf_table could have
+/// made: sizes that agree, keys in order, every pair naming a sampled point. What a database read
+/// from a damaged file is checked with, so that voting never reads out of bounds.
+void check_ppf_table(const PpfTable& table);
+
+/// Votes for an object's poses from its pair table.
 class PpfModel {
  public:
-  /// `points` and outward unit `normals` of the object's surface, object frame, metres.
+  /// Makes the table (make_ppf_table).
   PpfModel(std::span<const Eigen::Vector3f> points, std::span<const Eigen::Vector3f> normals, double diameter_m,
            const PpfOptions& options = {});
+  /// Votes with a table made earlier (a database's), checked with check_ppf_table; the table's own
+  /// shaping options hold, `options` gives the rest.
+  PpfModel(std::shared_ptr<const PpfTable> table, const PpfOptions& options = {});
 
-  const OrientedPoints& sampled() const { return sampled_; }
-  std::size_t pairs() const { return entries_.size(); }
-  double diameter_m() const { return diameter_m_; }
+  const PpfTable& table() const { return *table_; }
+  const OrientedPoints& sampled() const { return table_->sampled; }
+  std::size_t pairs() const { return table_->entries.size(); }
+  double diameter_m() const { return table_->diameter_m; }
   float sample_step_m() const { return step_m_; }
+  double normal_split_deg() const { return table_->normal_split_deg; }
   const PpfOptions& options() const { return options_; }
 
-  /// Hypotheses for this object in `scene` (sampled with ppf_sample at sample_step_m(), normals
-  /// towards the camera, camera frame), most votes first.
+  /// Hypotheses for this object in `scene` (sampled with ppf_sample at sample_step_m() and
+  /// normal_split_deg(), normals towards the camera, camera frame), most votes first.
   std::vector<PpfHypothesis> hypotheses(const OrientedPoints& scene) const;
 
  private:
-  struct Entry {
-    std::uint32_t point;  ///< the first point of the pair, into sampled_
-    std::uint32_t alpha;  ///< the second point's angle about the first's normal, in units of 2 pi / 13440
-  };
+  void prepare();
   std::size_t key(int d, int a1, int a2, int a3) const;
 
+  std::shared_ptr<const PpfTable> table_;
   PpfOptions options_;
-  double diameter_m_ = 0;
   float step_m_ = 0;
   int distance_bins_ = 0, feature_angle_bins_ = 0;
-  OrientedPoints sampled_;
   std::vector<Transform> T_local_model_;     ///< per sampled point: it at the origin, its normal along +x
-  std::vector<std::uint32_t> key_start_;     ///< entries of key k: [key_start_[k], key_start_[k + 1])
-  std::vector<Entry> entries_;
-  /// phi's alpha bin for each alpha_scene - alpha_model + 13440 (fine units, in [1, 26880)): one
+  /// phi's alpha bin for each alpha_scene - alpha_model + kAlphaUnits (in [1, 2 kAlphaUnits)): one
   /// table read per vote in place of a modulo and a division by a run-time divisor.
   std::vector<std::uint16_t> phi_bin_;
 };
