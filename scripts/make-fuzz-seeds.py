@@ -93,7 +93,7 @@ for kind, doc in enumerate([cam, scene_cam, gt, gt_info, models, results, target
 
 # view database (fuzz_view_database): the first byte even = a payload the target wraps in a valid
 # header and checksum, odd = a whole file as written (header checks and the checksum itself).
-def vpdb_payload(objects, views, grid_cell_m=0.003, cells=(), pair_table=None):
+def vpdb_payload(objects, views, grid_cell_m=0.003, cells=()):
     def s(text):
         b = text.encode()
         return struct.pack("<I", len(b)) + b
@@ -115,7 +115,6 @@ def vpdb_payload(objects, views, grid_cell_m=0.003, cells=(), pair_table=None):
         out += struct.pack("<I", 1) + struct.pack("<6d", 0, 0, 0, 0, 1, 0)  # axis z through the origin (interleaved)
         out += pts(verts) + struct.pack("<I", len(tris)) + b"".join(struct.pack("<3I", *t) for t in tris)  # drawing mesh
         out += struct.pack("<Q", len(cells)) + b"".join(struct.pack("<I", c) for c in cells)  # the ICP grid (none: filled later)
-        out += pair_table if pair_table else b"\x00"  # the point pair table (none: made on first use)
     out += struct.pack("<I", len(views))
     for obj, view_points in views:
         out += struct.pack("<I", obj) + struct.pack("<12d", 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0.5)
@@ -130,7 +129,8 @@ square = [(0.0, 0.0, 0.0), (0.1, 0.0, 0.0), (0.1, 0.1, 0.0), (0.0, 0.1, 0.0)]
 payload = vpdb_payload([(1, "square", square, [(0, 1, 2), (0, 2, 3)], square)], [(0, square), (0, square[:3])])
 write("view_database", "square_payload", b"\x00" + payload)
 header = (b"VPDB\r\n\x1a\n" + struct.pack("<IIQI", 4, 0x01020304, len(payload), zlib.crc32(payload)) + b"\x00" * 4)
-write("view_database", "square_file", b"\x01" + header + payload)
+no_tables = struct.pack("<QII", 0, 0, 0)  # the pair tables' header: none stored (the CRC-32 of nothing is 0)
+write("view_database", "square_file", b"\x01" + header + payload + no_tables)
 write("view_database", "empty_payload", b"\x00" + vpdb_payload([], []))
 # With a stored ICP grid: 5 cm cells over the square and a 4 cm margin are 4 x 4 x 2 cells, each
 # holding one of its four points (index + 1).
@@ -145,5 +145,6 @@ def u32s(values):
 key_start = [0] * 5 + [2] * 20  # keys 0-3 empty, key 4 holds both pairs
 table = (b"\x01" + struct.pack("<ddid", 0.1, 0.5, 4, 30.0) + struct.pack("<I", 2) + struct.pack("<6f", 0, 0, 0, 0.05, 0, 0)
          + struct.pack("<I", 2) + struct.pack("<6f", 0, 0, 1, 0, 0, 1) + u32s(key_start) + u32s([(0 << 14) | 100, (1 << 14) | 7000]))
-write("view_database", "pair_table_payload", b"\x00" + vpdb_payload([(1, "square", square, [(0, 1, 2), (0, 2, 3)], square)],
-                                                                     [(0, square)], pair_table=table))
+# (First byte 2: the next four bytes are the payload's length, the pair tables follow it.)
+table_db = vpdb_payload([(1, "square", square, [(0, 1, 2), (0, 2, 3)], square)], [(0, square)])
+write("view_database", "pair_table_payload", b"\x02" + struct.pack("<I", len(table_db)) + table_db + table)

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <system_error>
 
@@ -18,7 +19,7 @@ namespace viewpose {
 
 namespace fs = std::filesystem;
 
-std::vector<std::uint8_t> read_file_bytes(const fs::path& path, std::size_t max_bytes) {
+std::vector<std::uint8_t> read_file_prefix(const fs::path& path, std::size_t count, std::size_t max_bytes, std::uint64_t& file_size) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
   if (ec || !fs::exists(status)) throw Error(fmt::format("{}: no such file", path.string()));
@@ -28,14 +29,20 @@ std::vector<std::uint8_t> read_file_bytes(const fs::path& path, std::size_t max_
   if (size > max_bytes) {
     throw Error(fmt::format("{}: file is {} bytes, more than the limit of {}", path.string(), size, max_bytes));
   }
+  file_size = size;
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(std::min<std::uintmax_t>(size, count)));
   in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   if (static_cast<std::size_t>(in.gcount()) != bytes.size()) {
     throw Error(fmt::format("{}: read {} of {} bytes (file changed while reading?)", path.string(), in.gcount(), size));
   }
   return bytes;
+}
+
+std::vector<std::uint8_t> read_file_bytes(const fs::path& path, std::size_t max_bytes) {
+  std::uint64_t size = 0;
+  return read_file_prefix(path, std::numeric_limits<std::size_t>::max(), max_bytes, size);
 }
 
 namespace {

@@ -26,6 +26,7 @@ namespace {
 constexpr char kMagic[8] = {'V', 'P', 'D', 'B', '\r', '\n', '\x1a', '\n'};  // catches text-mode copies too
 constexpr std::uint32_t kByteOrderMark = 0x01020304;
 constexpr std::size_t kHeaderBytes = 32;
+constexpr std::size_t kTablesHeaderBytes = 16;  // after the payload: the pair tables' size and CRC-32
 
 class Writer {
  public:
@@ -278,7 +279,6 @@ std::vector<std::uint8_t> ViewDatabase::serialize() const {
       }
     w.put_mesh(o.drawn_mesh);
     w.put_cells(o.nearest_cells);
-    w.put_pair_table(o.pair_table.get());
   }
   w.put(static_cast<std::uint32_t>(views.size()));
   for (const auto& v : views) {
@@ -291,7 +291,11 @@ std::vector<std::uint8_t> ViewDatabase::serialize() const {
     w.put(v.described_points);
     w.put_points(v.icp_points);
   }
-  return file_from_payload(w.bytes);
+  Writer tables;
+  if (stored_pair_table_bytes(*this) > 0) {
+    for (const auto& o : objects) tables.put_pair_table(o.pair_table.get());
+  }
+  return file_from_payload(w.bytes, tables.bytes);
 }
 
 namespace {
@@ -301,9 +305,10 @@ std::uint32_t payload_crc(std::span<const std::uint8_t> payload) {
 }
 }  // namespace
 
-std::vector<std::uint8_t> ViewDatabase::file_from_payload(std::span<const std::uint8_t> payload) {
+std::vector<std::uint8_t> ViewDatabase::file_from_payload(std::span<const std::uint8_t> payload,
+                                                          std::span<const std::uint8_t> pair_tables) {
   Writer file;
-  file.bytes.reserve(kHeaderBytes + payload.size());
+  file.bytes.reserve(kHeaderBytes + payload.size() + kTablesHeaderBytes + pair_tables.size());
   for (char c : kMagic) file.put(c);
   file.put(kFormatVersion);
   file.put(kByteOrderMark);
@@ -311,32 +316,94 @@ std::vector<std::uint8_t> ViewDatabase::file_from_payload(std::span<const std::u
   file.put(payload_crc(payload));
   file.put(std::uint32_t{0});  // reserved
   file.bytes.insert(file.bytes.end(), payload.begin(), payload.end());
+  file.put(static_cast<std::uint64_t>(pair_tables.size()));
+  file.put(payload_crc(pair_tables));
+  file.put(std::uint32_t{0});  // reserved
+  file.bytes.insert(file.bytes.end(), pair_tables.begin(), pair_tables.end());
   return file.bytes;
 }
 
-ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std::string_view name) {
-  Reader header(bytes, name);
+namespace {
+
+// Where a file's parts lie, from its first kHeaderBytes + payload + kTablesHeaderBytes bytes (all
+// of `bytes` may be longer) and its whole size; the payload's checksum checked.
+struct FileParts {
+  std::span<const std::uint8_t> payload;
+  std::uint64_t tables_size = 0;
+  std::uint32_t tables_crc = 0;
+};
+
+// The header's payload size, or throws; `bytes` holds at least the header.
+std::uint64_t payload_size(std::span<const std::uint8_t> bytes, const Reader& header) {
   if (bytes.size() < kHeaderBytes || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) {
     header.fail("not a viewpose view database (no VPDB header)");
   }
-  std::uint32_t version, bom, crc;
+  std::uint32_t version, bom;
   std::uint64_t size;
   std::memcpy(&version, bytes.data() + 8, 4);
   std::memcpy(&bom, bytes.data() + 12, 4);
   std::memcpy(&size, bytes.data() + 16, 8);
-  std::memcpy(&crc, bytes.data() + 24, 4);
   if (bom != kByteOrderMark) header.fail("written on a machine of the other byte order; rebuild it here with `viewpose db build`");
-  if (version != kFormatVersion) {
+  if (version != ViewDatabase::kFormatVersion) {
     header.fail(fmt::format("database format version {}, this viewpose reads version {}; rebuild it with `viewpose db build`",
-                            version, kFormatVersion));
+                            version, ViewDatabase::kFormatVersion));
   }
-  if (size != bytes.size() - kHeaderBytes) {
-    header.fail(fmt::format("header says {} bytes of data but the file holds {} (truncated or padded)", size,
-                            bytes.size() - kHeaderBytes));
-  }
-  const auto payload = bytes.subspan(kHeaderBytes);
-  if (payload_crc(payload) != crc) header.fail("checksum mismatch: the file is corrupted");
+  return size;
+}
 
+FileParts file_parts(std::span<const std::uint8_t> bytes, std::uint64_t file_size, const Reader& header) {
+  const std::uint64_t size = payload_size(bytes, header);
+  const std::uint64_t after_header = file_size - kHeaderBytes;
+  std::uint64_t tables_size = 0;
+  if (size <= after_header && after_header - size >= kTablesHeaderBytes && bytes.size() >= kHeaderBytes + size + kTablesHeaderBytes) {
+    std::memcpy(&tables_size, bytes.data() + kHeaderBytes + size, 8);
+  }
+  if (size > after_header || after_header - size < kTablesHeaderBytes || tables_size != after_header - size - kTablesHeaderBytes) {
+    header.fail(fmt::format("header says {} bytes of data but the file holds {} (truncated or padded)", size, after_header));
+  }
+  FileParts parts;
+  std::uint32_t crc;
+  std::memcpy(&crc, bytes.data() + 24, 4);
+  parts.payload = bytes.subspan(kHeaderBytes, static_cast<std::size_t>(size));
+  if (payload_crc(parts.payload) != crc) header.fail("checksum mismatch: the file is corrupted");
+  parts.tables_size = tables_size;
+  std::memcpy(&parts.tables_crc, bytes.data() + kHeaderBytes + size + 8, 4);
+  return parts;
+}
+
+ViewDatabase read_payload(std::span<const std::uint8_t> payload, std::string_view name);
+void read_pair_tables(ViewDatabase& db, std::span<const std::uint8_t> tables, std::uint32_t crc, std::string_view name);
+
+}  // namespace
+
+ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std::string_view name, DatabaseLoadOptions options) {
+  const Reader header(bytes, name);
+  const FileParts parts = file_parts(bytes, bytes.size(), header);
+  ViewDatabase db = read_payload(parts.payload, name);
+  if (options.pair_tables) {
+    read_pair_tables(db, bytes.subspan(bytes.size() - static_cast<std::size_t>(parts.tables_size)), parts.tables_crc, name);
+  }
+  return db;
+}
+
+ViewDatabase ViewDatabase::load(const std::filesystem::path& path, DatabaseLoadOptions options) {
+  if (options.pair_tables) return deserialize(read_file_bytes(path, kMaxFileBytes), path.string(), options);
+  // The header, then the payload and the tables' header: the tables are neither read nor unpacked.
+  const std::string name = path.string();
+  const Reader header({}, name);
+  std::uint64_t file_size = 0;
+  std::vector<std::uint8_t> bytes = read_file_prefix(path, kHeaderBytes, kMaxFileBytes, file_size);
+  const std::uint64_t size = payload_size(bytes, header);
+  if (size <= file_size - kHeaderBytes) {
+    bytes = read_file_prefix(path, static_cast<std::size_t>(std::min(file_size, kHeaderBytes + size + kTablesHeaderBytes)), kMaxFileBytes,
+                             file_size);
+  }
+  return read_payload(file_parts(bytes, file_size, header).payload, name);
+}
+
+namespace {
+
+ViewDatabase read_payload(std::span<const std::uint8_t> payload, std::string_view name) {
   Reader r(payload, name);
   ViewDatabase db;
   db.params = params_from_json(r.get_string(), r);
@@ -382,7 +449,6 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
     if (!o.nearest_cells.empty() && !NearestGrid::fits(o.model_points, db.params.grid_cell_m, db.params.grid_margin_m, o.nearest_cells)) {
       r.fail("an object's nearest-point grid does not fit its model points");
     }
-    o.pair_table = r.get_pair_table();
     db.objects.push_back(std::move(o));
   }
   const auto n_views = r.get<std::uint32_t>();
@@ -411,11 +477,22 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
   return db;
 }
 
+void read_pair_tables(ViewDatabase& db, std::span<const std::uint8_t> tables, std::uint32_t crc, std::string_view name) {
+  Reader r(tables, name);
+  if (payload_crc(tables) != crc) r.fail("checksum mismatch in the pair tables: the file is corrupted");
+  if (tables.empty()) return;  // none stored
+  r.need_records(db.objects.size(), 1);
+  for (DatabaseObject& o : db.objects) {
+    o.pair_table = r.get_pair_table();
+    if (o.pair_table && o.pair_table->diameter_m != o.diameter_m) r.fail("an object's pair table was made for another size");
+  }
+  if (!r.at_end()) r.fail("unexpected data after the last pair table");
+}
+
+}  // namespace
+
 void ViewDatabase::save(const std::filesystem::path& path) const { write_file_atomic(path, serialize()); }
 
-ViewDatabase ViewDatabase::load(const std::filesystem::path& path) {
-  return deserialize(read_file_bytes(path, kMaxFileBytes), path.string());
-}
 
 int add_captured_view(ViewDatabase& db, const PointCloud& cloud, const std::string& name) {
   if (name.empty()) throw Error("add-view: the object needs a name");

@@ -182,6 +182,30 @@ TEST(ViewDatabaseTest, PairTablesAreStoredWithinTheirByteLimitAndReadBackWhole) 
     EXPECT_TRUE(b.made_with(db.params.ppf));
   }
   EXPECT_EQ(stored_pair_table_bytes(back), db.objects[0].pair_table->bytes() + db.objects[1].pair_table->bytes());
+  // A load for the views' poses alone neither reads nor unpacks them; the rest is the same.
+  test::TempDir dir;
+  db.save(dir / "tables.vpdb");
+  const ViewDatabase without = ViewDatabase::load(dir / "tables.vpdb", {.pair_tables = false});
+  EXPECT_FALSE(without.objects[0].pair_table || without.objects[1].pair_table);
+  EXPECT_EQ(without.serialize(), [&] {
+    ViewDatabase stripped = db;
+    for (DatabaseObject& o : stripped.objects) o.pair_table.reset();
+    return stripped.serialize();
+  }());
+  EXPECT_TRUE(ViewDatabase::load(dir / "tables.vpdb").objects[1].pair_table);
+  // Damage in the tables is found by the load that reads them; a cut file by both.
+  std::vector<std::uint8_t> file = db.serialize();
+  file[file.size() - 100] ^= 0x10;
+  write_file_atomic(dir / "flipped.vpdb", file);
+  expect_error([&] { ViewDatabase::load(dir / "flipped.vpdb"); }, "checksum mismatch in the pair tables");
+  EXPECT_EQ(ViewDatabase::load(dir / "flipped.vpdb", {.pair_tables = false}).views.size(), db.views.size());
+  file.resize(file.size() - 100);
+  write_file_atomic(dir / "cut.vpdb", file);
+  expect_error([&] { ViewDatabase::load(dir / "cut.vpdb"); }, "truncated or padded");
+  expect_error([&] { ViewDatabase::load(dir / "cut.vpdb", {.pair_tables = false}); }, "truncated or padded");
+  file.resize(20);
+  write_file_atomic(dir / "header.vpdb", file);
+  expect_error([&] { ViewDatabase::load(dir / "header.vpdb", {.pair_tables = false}); }, "not a viewpose view database");
   // Room for the smaller table alone: only it is stored; none at 0. The recognizer makes the rest.
   const std::vector<ObjectModel> models = {{1, "jug", make_jug()}, {5, "can", make_can()}};
   DatabaseParams p = db.params;
@@ -246,14 +270,21 @@ TEST(ViewDatabaseTest, TheFuzzersSeedFileIsADatabaseAndItsDamagedValuesAreRefuse
   ASSERT_EQ(with_grid.objects.size(), 1u);
   EXPECT_EQ(with_grid.objects[0].nearest_cells.size(), 32u);
   // And the seed with a stored pair table (two points, their two pairs) with it.
+  // (Its first byte 2: four bytes of the payload's length, the payload, then the tables.)
   const auto table_seed = read_file_bytes(std::filesystem::path(VIEWPOSE_SOURCE_DIR) / "fuzz/corpus/view_database/pair_table_payload");
-  const ViewDatabase with_table = ViewDatabase::deserialize(ViewDatabase::file_from_payload(std::span(table_seed).subspan(1)), "table");
+  ASSERT_EQ(table_seed[0], 2);
+  std::uint32_t payload_bytes = 0;
+  std::memcpy(&payload_bytes, table_seed.data() + 1, 4);
+  const auto table_parts = std::span(table_seed).subspan(5);
+  const ViewDatabase with_table = ViewDatabase::deserialize(
+      ViewDatabase::file_from_payload(table_parts.first(payload_bytes), table_parts.subspan(payload_bytes)), "table");
   ASSERT_TRUE(with_table.objects[0].pair_table);
   EXPECT_EQ(with_table.objects[0].pair_table->entries.size(), 2u);
   EXPECT_FALSE(with_grid.objects[0].pair_table);
   // A value no build could write, with the checksum made right again: refused, by name.
   // The script's header is the library's.
-  const std::vector<std::uint8_t> payload(file.begin() + 32, file.end());
+  // (After the payload, the pair tables' 16-byte header: none stored.)
+  const std::vector<std::uint8_t> payload(file.begin() + 32, file.end() - 16);
   EXPECT_EQ(ViewDatabase::file_from_payload(payload), file);
   const auto refused = [&](std::size_t offset, float value) {
     std::vector<std::uint8_t> bad_payload = payload;
@@ -267,8 +298,8 @@ TEST(ViewDatabaseTest, TheFuzzersSeedFileIsADatabaseAndItsDamagedValuesAreRefuse
     return std::string("accepted");
   };
   // The last view's last ICP point, and its first VFH bin.
-  EXPECT_NE(refused(file.size() - 4, NAN).find("not a finite number"), std::string::npos);
-  const std::size_t last_view_vfh = file.size() - (4 + 2 * 12) - 4 - 12 - 4 * 90 - 4 * 308;
+  EXPECT_NE(refused(file.size() - 16 - 4, NAN).find("not a finite number"), std::string::npos);
+  const std::size_t last_view_vfh = file.size() - 16 - (4 + 2 * 12) - 4 - 12 - 4 * 90 - 4 * 308;
   EXPECT_NE(refused(last_view_vfh, INFINITY).find("descriptor is not finite"), std::string::npos);
 }
 

@@ -20,6 +20,12 @@ inline constexpr std::size_t kMaxInputFileBytes = std::size_t{4} << 30;
 std::vector<std::uint8_t> read_file_bytes(const std::filesystem::path& path,
                                           std::size_t max_bytes = kMaxInputFileBytes);
 
+/// The first `count` bytes of `path` (fewer where the file is shorter), and in `file_size` its
+/// whole size: the parts of a large file that are needed, without reading the rest. The same errors
+/// as read_file_bytes.
+std::vector<std::uint8_t> read_file_prefix(const std::filesystem::path& path, std::size_t count, std::size_t max_bytes,
+                                           std::uint64_t& file_size);
+
 /// Writes `bytes` to `path` atomically. Throws viewpose::Error on failure, leaving any previous
 /// file at `path` untouched and no temporary file behind.
 void write_file_atomic(const std::filesystem::path& path, std::span<const std::uint8_t> bytes);

@@ -77,6 +77,13 @@ struct DatabaseParams {
   std::size_t max_pair_table_bytes = std::size_t{256} << 20;
 };
 
+/// What a load unpacks. The pair tables are about half of a database's bytes, and only point pair
+/// votes (MatchOptions::source other than vfh) use them: a process that will not cast votes neither
+/// reads nor unpacks them, and a recognizer that does makes any table missing.
+struct DatabaseLoadOptions {
+  bool pair_tables = true;
+};
+
 struct ViewDatabase {
   // 2: objects carry their symmetries. 3: objects carry a drawing mesh and a filled ICP grid; views
   // keep only their ICP points. 4: objects carry their point pair table.
@@ -86,14 +93,18 @@ struct ViewDatabase {
   std::vector<ViewEntry> views;
 
   void save(const std::filesystem::path& path) const;  ///< atomic
-  static ViewDatabase load(const std::filesystem::path& path);
+  static ViewDatabase load(const std::filesystem::path& path, DatabaseLoadOptions options = {});
   std::vector<std::uint8_t> serialize() const;
-  static ViewDatabase deserialize(std::span<const std::uint8_t> bytes, std::string_view name);
-  /// A whole file around a payload: the 32-byte header (magic, format version, byte order, payload
-  /// size, CRC-32 of the payload) and the payload. serialize() writes its payload through this; tests
-  /// and the fuzzer use it to give hand-made payloads a valid header.
-  static std::vector<std::uint8_t> file_from_payload(std::span<const std::uint8_t> payload);
-  /// Databases grow by about 2.3 MB per object at 80 views (hope8: 18.3 MB); files up to this size are read.
+  static ViewDatabase deserialize(std::span<const std::uint8_t> bytes, std::string_view name, DatabaseLoadOptions options = {});
+  /// A whole file around two payloads: the 32-byte header (magic, format version, byte order,
+  /// payload size, CRC-32 of the payload), the payload (parameters, objects, views), then the
+  /// pair tables' 16-byte header (size, CRC-32) and the tables (none where empty: one record per
+  /// object otherwise). serialize() writes through this; tests and the fuzzer use it to give
+  /// hand-made payloads valid headers.
+  static std::vector<std::uint8_t> file_from_payload(std::span<const std::uint8_t> payload,
+                                                     std::span<const std::uint8_t> pair_tables = {});
+  /// Databases grow by about 2.3 MB per object at 80 views, and as much again for its pair table
+  /// (hope8: 18.3 + 17.6 MB); files up to this size are read.
   static constexpr std::size_t kMaxFileBytes = std::size_t{64} << 30;
 };
 
