@@ -189,11 +189,11 @@ PYBIND11_MODULE(viewpose, m) {
                        std::size_t budget, std::size_t screen, const std::string& source, double deadline_ms,
                        std::optional<double> min_score) {
              RecognizerOptions o;
-             if (source == "vfh") o.match.source = PoseSource::vfh;
-             else if (source == "ppf") o.match.source = PoseSource::ppf;
-             else if (source == "both") o.match.source = PoseSource::both;
-             else if (source == "touching") o.match.source = PoseSource::touching;
-             else throw py::value_error("source: \"" + source + "\" is none of vfh, ppf, both, touching");
+             try {
+               o.match.source = pose_source_from_name(source);
+             } catch (const Error& e) {
+               throw py::value_error(e.what());  // (a wrong argument value, as Python names it)
+             }
              o.accept.keep_best = keep_best;
              o.split.enabled = split_touching;
              o.match.per_object = matches;

@@ -74,7 +74,7 @@ struct RecognizeFlags {
                    "(point pair feature votes over the cluster: touching and half-hidden objects; about 15 ms per "
                    "object and cluster more), both (the views' poses first; where none passes, the votes'), or touching (as both, "
                    "but votes only in what a detection leaves of its region: objects touching it)")
-        ->check(CLI::IsMember({"vfh", "ppf", "both", "touching"}))
+        ->check(CLI::IsMember(std::vector<std::string>(std::begin(kPoseSourceNames), std::end(kPoseSourceNames))))
         ->capture_default_str();
     cmd.add_option("--deadline-ms", deadline_ms,
                    "Stop trying poses after this long per frame and report what is verified, marked cut short (0: no limit)")
@@ -88,6 +88,8 @@ struct RecognizeFlags {
                  "Write no run times into the output files (a BOP CSV's time is -1, the JSON has none), so that they "
                  "depend on the inputs alone, byte for byte, whatever the thread count");
   }
+  // The pair tables are read only where votes will be cast.
+  DatabaseLoadOptions load_options() const { return {.pair_tables = options().match.source != PoseSource::vfh}; }
   RecognizerOptions options() const {
     RecognizerOptions o;
     o.accept.keep_best = keep_best;
@@ -95,10 +97,7 @@ struct RecognizeFlags {
     o.match.per_object = matches;
     o.match.max_hypotheses = budget;
     o.match.prescreen = screen;
-    o.match.source = source == "ppf"    ? PoseSource::ppf
-                     : source == "both" ? PoseSource::both
-                     : source == "touching" ? PoseSource::touching
-                                            : PoseSource::vfh;
+    o.match.source = pose_source_from_name(source);
     o.run.deadline_ms = deadline_ms;
     if (min_score >= 0) o.accept.min_confidence = min_score;
     return o;
@@ -153,7 +152,7 @@ void add_recognize_command(CLI::App& app, int& exit_code) {
       set_thread_count(threads);
       return load_scene(o->scene, o->camera);
     });
-    const ViewDatabase db = ViewDatabase::load(o->flags.db);
+    const ViewDatabase db = ViewDatabase::load(o->flags.db, o->flags.load_options());
     const Frame frame = scene.get();
     // One frame: ICP grids the database does not store fill only where its hypotheses look,
     // instead of whole before it (about 0.1 s an object).
@@ -379,7 +378,7 @@ void add_bop_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--images", o->images, "Do at most this many images in this run (then --resume does more)")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 40));
   cmd->callback([o, &exit_code] {
-    const ViewDatabase db = ViewDatabase::load(o->flags.db);
+    const ViewDatabase db = ViewDatabase::load(o->flags.db, o->flags.load_options());
     BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
     for (const auto& note : ds.notes) fmt::print(stderr, "viewpose: note: {}\n", note);
     // The BOP19 task: per image, the objects to find and how many of each.

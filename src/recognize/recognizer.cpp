@@ -9,6 +9,7 @@
 #include <span>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/transform.hpp"
@@ -21,6 +22,13 @@
 #include "viewpose/segment/voxel_grid.hpp"
 
 namespace viewpose {
+
+PoseSource pose_source_from_name(std::string_view name) {
+  for (std::size_t i = 0; i < std::size(kPoseSourceNames); ++i) {
+    if (name == kPoseSourceNames[i]) return static_cast<PoseSource>(i);
+  }
+  throw Error(fmt::format("source: \"{}\" is none of {}", name, fmt::join(kPoseSourceNames, ", ")));
+}
 
 Recognizer::Recognizer(const ViewDatabase& db, RecognizerOptions options)
     // Not owned: a shared_ptr that points at the caller's database and owns nothing.

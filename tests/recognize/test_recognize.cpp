@@ -508,6 +508,11 @@ TEST(Recognize, PointPairVotesAloneOrBesideTheViewsFindBothObjects) {
   bad.match.ppf.angle_bins = 11;  // (does not divide 13440)
   bad.run.prepare_objects_up_to = 0;  // (the tables would be made on first use)
   EXPECT_THROW(Recognizer(db, bad), Error);
+  // The sources' names, as the command line and the Python module take them.
+  for (const PoseSource source : {PoseSource::vfh, PoseSource::ppf, PoseSource::both, PoseSource::touching}) {
+    EXPECT_EQ(pose_source_from_name(kPoseSourceNames[static_cast<int>(source)]), source);
+  }
+  test::expect_error([] { pose_source_from_name("PPF"); }, "source: \"PPF\" is none of vfh, ppf, both, touching");
 }
 
 TEST(Recognize, ObjectsTooSmallForAClusterAreSkippedWithTheSameResult) {

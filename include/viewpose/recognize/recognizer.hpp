@@ -10,6 +10,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "viewpose/core/occupancy_grid.hpp"
@@ -44,6 +45,11 @@ struct VerifiedHypothesis {
 /// object touching the one found, which no view's VFH describes whole) the votes' poses too, after
 /// the views': votes where they are most needed, at a fraction of their cost everywhere.
 enum class PoseSource { vfh, ppf, both, touching };
+
+/// The names the command line and the Python module give the sources, in PoseSource's order.
+inline constexpr std::string_view kPoseSourceNames[] = {"vfh", "ppf", "both", "touching"};
+/// The source of that name; Error ("source: "x" is none of vfh, ppf, both, touching") for another.
+PoseSource pose_source_from_name(std::string_view name);
 
 /// Which database views are tried for a region (a cluster, a convex part, what a detection left of
 /// a cluster), the poses each gives, and in what order they are refined and verified.
