@@ -49,7 +49,7 @@ struct RecognizeFlags {
   std::size_t matches = 20;
   std::size_t budget = RecognizerOptions{}.match.max_hypotheses;
   std::size_t screen = RecognizerOptions{}.match.prescreen;
-  std::string source = "vfh";
+  std::string source{kPoseSourceNames[static_cast<int>(RecognizerOptions{}.match.source)]};
   double deadline_ms = 0;
   double min_score = -1;  // < 0: the recognizer's default
   bool no_times = false;

@@ -268,7 +268,12 @@ std::vector<PpfHypothesis> PpfModel::hypotheses(const OrientedPoints& scene) con
   const int bins = options_.angle_bins;
   const double angle_step = 2 * kPi / bins;
   const KdTree tree(scene.points);
-  const auto stride = static_cast<std::size_t>(options_.reference_stride);
+  // Every reference_stride-th sampled point, and no more than max_reference_points of them, spread
+  // over the whole region (the sample is in grid order): a region's votes take a bounded time.
+  auto stride = static_cast<std::size_t>(options_.reference_stride);
+  if (options_.max_reference_points > 0) {
+    stride = std::max(stride, (scene.size() + options_.max_reference_points - 1) / options_.max_reference_points);
+  }
   const std::size_t references = (scene.size() + stride - 1) / stride;
   struct Peak {
     Transform T_camera_object = Transform::Identity();

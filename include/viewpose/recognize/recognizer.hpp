@@ -54,9 +54,10 @@ PoseSource pose_source_from_name(std::string_view name);
 /// Which database views are tried for a region (a cluster, a convex part, what a detection left of
 /// a cluster), the poses each gives, and in what order they are refined and verified.
 struct MatchOptions {
-  /// VFH alone by default: point pair votes cost about 15 ms per object and region (docs/BENCHMARK.md,
-  /// "Point pair votes": with `both`, on the real YCB-V frames 0.40 s a frame against 0.07, for two poses more of 28).
-  PoseSource source = PoseSource::vfh;
+  /// `touching` by default: on the real YCB-V frames it finds 27 of 28 poses where `vfh` finds 25,
+  /// at 0.10 s a frame median against 0.07 (docs/BENCHMARK.md, "Point pair votes"); votes cost
+  /// about 15 ms per object and region, and are cast only where a detection leaves part of its region.
+  PoseSource source = PoseSource::touching;
   /// The pair tables and votes (with source ppf or both); each object's table is made when the
   /// recognizer is (databases of up to RunOptions::prepare_objects_up_to objects) or on first use.
   PpfOptions ppf{};
