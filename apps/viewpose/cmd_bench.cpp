@@ -179,7 +179,8 @@ void add_bench_command(CLI::App& app, int& exit_code) {
     double db_build_ms = 0, db_load_ms = 0;
     if (!o->db.empty()) {  // what a process run per file pays before its first frame
       const auto t = Clock::now();
-      db = ViewDatabase::load(o->db, {.pair_tables = false});  // (the default source, the views', casts no votes)
+      // (The pair tables only where the default source casts votes.)
+      db = ViewDatabase::load(o->db, {.pair_tables = RecognizerOptions{}.match.source != PoseSource::vfh});
       db_load_ms = ms_since(t);
     }
     std::vector<BenchFrame> frames;

@@ -89,7 +89,8 @@ void add_live_command(CLI::App& app, int& exit_code) {
         std::signal(SIGTERM, SIG_DFL);
       }
     } restore_signals;
-    const ViewDatabase db = ViewDatabase::load(o->db, {.pair_tables = false});  // (views' poses only: no votes)
+    // (The pair tables only where the default source casts votes.)
+    const ViewDatabase db = ViewDatabase::load(o->db, {.pair_tables = RecognizerOptions{}.match.source != PoseSource::vfh});
     RecognizerOptions options;
     options.split.enabled = !o->no_split;
     options.run.deadline_ms = o->deadline_ms;
