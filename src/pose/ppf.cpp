@@ -176,10 +176,17 @@ PpfTable make_ppf_table(std::span<const Eigen::Vector3f> points, std::span<const
   if (n < 2) throw Error("ppf: the model has fewer than two oriented points");
   if (n > PpfTable::kMaxPoints) throw Error("ppf: the model samples to too many points for a pair table (raise sample_fraction)");
 
-  // Every ordered pair within the diameter, keyed; counted first, then placed (one pass each).
-  std::vector<std::uint32_t> pair_key, pair_entry;
+  // Every ordered pair within the diameter, keyed: each first point's pairs on a thread, then all in
+  // the order of their first points (the same table whatever the threads), counted, then placed.
+  struct Pairs {
+    std::vector<std::uint32_t> keys, entries;
+  };
+  std::vector<Pairs> by_point(n);
   const float max_d = static_cast<float>(diameter_m);
-  for (std::size_t i = 0; i < n; ++i) {
+#pragma omp parallel for schedule(dynamic, 16)
+  for (std::ptrdiff_t pi = 0; pi < static_cast<std::ptrdiff_t>(n); ++pi) {
+    const auto i = static_cast<std::size_t>(pi);
+    Pairs& out = by_point[i];
     const Transform T_local_model = local_frame(t.sampled.points[i], t.sampled.normals[i]);
     for (std::size_t j = 0; j < n; ++j) {
       Feature f;
@@ -189,9 +196,15 @@ PpfTable make_ppf_table(std::span<const Eigen::Vector3f> points, std::span<const
       }
       const int d = std::min(distance_bins - 1, static_cast<int>(f.distance / step_m));
       const auto a = [&](float x) { return std::min(feature_angle_bins - 1, static_cast<int>(x / angle_step)); };
-      pair_key.push_back(static_cast<std::uint32_t>(key_of(feature_angle_bins, d, a(f.a1), a(f.a2), a(f.a3))));
-      pair_entry.push_back(PpfTable::entry(static_cast<std::uint32_t>(i), alpha_units(pair_alpha(T_local_model, t.sampled.points[j]))));
+      out.keys.push_back(static_cast<std::uint32_t>(key_of(feature_angle_bins, d, a(f.a1), a(f.a2), a(f.a3))));
+      out.entries.push_back(PpfTable::entry(static_cast<std::uint32_t>(i), alpha_units(pair_alpha(T_local_model, t.sampled.points[j]))));
     }
+  }
+  std::vector<std::uint32_t> pair_key, pair_entry;
+  for (Pairs& p : by_point) {
+    pair_key.insert(pair_key.end(), p.keys.begin(), p.keys.end());
+    pair_entry.insert(pair_entry.end(), p.entries.begin(), p.entries.end());
+    p = Pairs{};
   }
   t.key_start.assign(keys_of(options.sample_fraction, options.angle_bins) + 1, 0);
   for (const std::uint32_t k : pair_key) ++t.key_start[k + 1];
