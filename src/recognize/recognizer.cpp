@@ -75,32 +75,27 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
   // Pair tables may be made later, on a cluster's thread: their options are checked now.
   if (options_.match.source != PoseSource::vfh) check_ppf_options(options_.match.ppf);
   if (db.objects.size() <= options_.run.prepare_objects_up_to) {
-    // (An exception may not leave a parallel loop: the first is kept and thrown after it.)
-    const auto objects = static_cast<std::ptrdiff_t>(db.objects.size());
-    std::exception_ptr failed;
-    std::mutex failed_mutex;
-#pragma omp parallel for schedule(dynamic, 1)
-    for (std::ptrdiff_t o = 0; o < objects; ++o) {
-      try {
-        icp_target(static_cast<std::uint32_t>(o)).grid(options_.icp.grid_cell_m, options_.icp.reach_m());
-      } catch (...) {
-        const std::lock_guard lock(failed_mutex);
-        if (!failed) failed = std::current_exception();
-      }
-    }
-    if (failed) std::rethrow_exception(failed);
-    // (With touching, only the objects voted for in a detection's rest: made on first use.)
-    if (options_.match.source == PoseSource::ppf || options_.match.source == PoseSource::both) {
+    // Each object on a thread. (An exception may not leave a parallel loop: the first is kept and
+    // thrown after it.)
+    const auto each_object = [&](const auto& prepare) {
+      const auto objects = static_cast<std::ptrdiff_t>(db.objects.size());
+      std::exception_ptr failed;
+      std::mutex failed_mutex;
 #pragma omp parallel for schedule(dynamic, 1)
       for (std::ptrdiff_t o = 0; o < objects; ++o) {
         try {
-          pair_table(static_cast<std::uint32_t>(o));
+          prepare(static_cast<std::uint32_t>(o));
         } catch (...) {
           const std::lock_guard lock(failed_mutex);
           if (!failed) failed = std::current_exception();
         }
       }
       if (failed) std::rethrow_exception(failed);
+    };
+    each_object([&](std::uint32_t o) { icp_target(o).grid(options_.icp.grid_cell_m, options_.icp.reach_m()); });
+    // (With touching, only the objects voted for in a detection's rest: made on first use.)
+    if (options_.match.source == PoseSource::ppf || options_.match.source == PoseSource::both) {
+      each_object([&](std::uint32_t o) { pair_table(o); });
     }
     for (std::uint32_t o = 0; o < db.objects.size() && options_.run.fill_grids_at_start; ++o) {
       if (const NearestGrid* grid = icp_target(o).grid(options_.icp.grid_cell_m, options_.icp.reach_m())) grid->fill_all();  // (nothing to do where stored)
