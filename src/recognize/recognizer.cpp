@@ -17,35 +17,12 @@
 #include "viewpose/pose/coarse_fit.hpp"
 #include "viewpose/pose/confidence.hpp"
 #include "viewpose/core/threads.hpp"
+#include "viewpose/recognize/candidate_order.hpp"
 #include "viewpose/render/simplify.hpp"
 #include "viewpose/segment/convex_segments.hpp"
 #include "viewpose/segment/voxel_grid.hpp"
 
 namespace viewpose {
-
-namespace {
-
-// Orders `candidates` (best first) so that each object's k-th comes before any object's (k+1)-th,
-// keeping their order otherwise. For point pair votes: each object's votes are evidence for that
-// object alone, and a shared measure of fit favours the larger objects, which cover more of any
-// region (on YCB-V 0014 the 26 cm box's poses took the budget from the can's right one).
-template <typename Iterator>
-void interleave_objects(Iterator first, Iterator last) {
-  using Candidate = typename std::iterator_traits<Iterator>::value_type;
-  std::vector<std::uint32_t> seen;
-  std::vector<std::pair<std::uint32_t, std::ptrdiff_t>> rank;  // (the object's k, position)
-  for (auto c = first; c != last; ++c) {
-    if (c->object >= seen.size()) seen.resize(c->object + 1, 0);
-    rank.push_back({seen[c->object]++, c - first});
-  }
-  std::stable_sort(rank.begin(), rank.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<Candidate> ordered;
-  ordered.reserve(rank.size());
-  for (const auto& r : rank) ordered.push_back(first[r.second]);
-  std::copy(ordered.begin(), ordered.end(), first);
-}
-
-}  // namespace
 
 PoseSource pose_source_from_name(std::string_view name) {
   for (std::size_t i = 0; i < std::size(kPoseSourceNames); ++i) {
@@ -536,7 +513,7 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
   // Best screened first; equals keep their coarse-fit order. The unscreened rest keep theirs after.
   std::stable_sort(first, first + count, [](const Candidate& a, const Candidate& b) { return a.screen_fitness > b.screen_fitness; });
   if (std::all_of(first, first + count, [](const Candidate& c) { return c.match == Candidate::kFromPairVotes; })) {
-    interleave_objects(first, first + count);
+    interleave_by_object(first, first + count);
   }
   out.screened += n;
   out.times.icp_ms += ms_since(t);
@@ -580,7 +557,7 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
   }
   // Best fit first; equal fits keep the order of the views' VFH distance and their rolls' peaks.
   std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.fit > b.fit; });
-  if (options_.match.source == PoseSource::ppf) interleave_objects(candidates.begin(), candidates.end());
+  if (options_.match.source == PoseSource::ppf) interleave_by_object(candidates.begin(), candidates.end());
   out.times.match_ms += ms_since(t1);
   return candidates;
 }
@@ -767,7 +744,7 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
       for (Region& region : regions) {
         region.candidates = pair_vote_candidates(region, OccupancyGrid(region.icp_source, options_.match.fit_cell_m));
         std::stable_sort(region.candidates.begin(), region.candidates.end(), [](const Candidate& x, const Candidate& y) { return x.fit > y.fit; });
-        interleave_objects(region.candidates.begin(), region.candidates.end());
+        interleave_by_object(region.candidates.begin(), region.candidates.end());
         region.screen_done = false;
       }
       out.times.match_ms += ms_since(t);

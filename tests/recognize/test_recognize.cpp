@@ -14,6 +14,7 @@
 #include "viewpose/io/bop.hpp"
 #include "viewpose/io/pcd.hpp"
 #include "viewpose/io/ply.hpp"
+#include "viewpose/recognize/candidate_order.hpp"
 #include "viewpose/recognize/recognizer.hpp"
 #include "viewpose/render/shapes.hpp"
 #include "viewpose/simulate/scene.hpp"
@@ -487,6 +488,28 @@ TEST(Recognize, TwoObjectFrameGivesBothWithTheRightIds) {
   const Recognition r = Recognizer(db).recognize(frame_from_depth(f.depth, K));
   ASSERT_EQ(r.detections.size(), 2u);
   expect_jug_and_can_found(r, f);
+}
+
+TEST(Recognize, VotePosesAreTriedObjectByObject) {
+  // Each object's k-th pose before any object's (k+1)-th, and otherwise the order given: a large
+  // object's many well-fitting poses do not push a small object's best past the budget.
+  struct Pose {
+    std::uint32_t object;
+    char name;
+  };
+  std::vector<Pose> poses = {{3, 'a'}, {3, 'b'}, {11, 'c'}, {9, 'd'}, {3, 'e'}, {11, 'f'}, {11, 'g'}};
+  interleave_by_object(poses.begin(), poses.end());
+  std::string order;
+  for (const Pose& p : poses) order += p.name;
+  EXPECT_EQ(order, "acdbfeg");
+  std::vector<Pose> none;
+  interleave_by_object(none.begin(), none.end());
+  // Part of a list: the rest stays where it was.
+  std::vector<Pose> part = {{1, 'x'}, {2, 'y'}, {2, 'z'}, {2, 'w'}, {1, 'v'}};
+  interleave_by_object(part.begin() + 1, part.end());
+  order.clear();
+  for (const Pose& p : part) order += p.name;
+  EXPECT_EQ(order, "xyvzw");
 }
 
 TEST(Recognize, PointPairVotesAloneOrBesideTheViewsFindBothObjects) {
