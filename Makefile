@@ -8,6 +8,7 @@
 #   make check          all four, as CI runs them
 #   make bench          micro-benchmarks of each stage, then the pipeline over 100 frames
 #   make bench-pcl      install PCL, and time the thesis's PCL pipeline beside ours, stage by stage
+#   make bench-opencv   install OpenCV's surface_matching, and set our point pair votes beside its PPF3DDetector
 #   make results        real frames, simulated rooms, the thesis's experiment; writes docs/RESULTS.md
 #   make confidence     make the simulated data the confidence model is fit on, and fit it (docs/CONFIDENCE.md)
 #   make pcl-fixtures   install PCL, and regenerate tests/fixtures/pcl from PCL's own code
@@ -25,7 +26,7 @@ CMAKE_FLAGS ?=
 # the makefiles CMake generates, which cmake --build runs).
 MAKEFLAGS += --no-print-directory
 
-.PHONY: all deps build demo test test-sanitize test-thread fuzz check bench bench-pcl results confidence pcl-fixtures clean
+.PHONY: all deps build demo test test-sanitize test-thread fuzz check bench bench-pcl bench-opencv results confidence pcl-fixtures clean
 
 all: build
 
@@ -79,6 +80,12 @@ bench-pcl: deps
 	@cmake --build build-pcl-bench -j $(JOBS) --target viewpose_pcl_bench viewpose_cli
 	@./build-pcl-bench/viewpose_pcl_bench --frames $(PCL_FRAMES) --json docs/results/pcl_side_by_side.json
 	@scripts/bench-pcl-real.sh build-pcl-bench docs/results/pcl_side_by_side.json
+
+bench-opencv: deps
+	@scripts/install-deps.sh opencv
+	@cmake -S . -B build-opencv-bench -DCMAKE_BUILD_TYPE=Release -DVIEWPOSE_OPENCV_BENCH=ON -DVIEWPOSE_TESTS=OFF -DVIEWPOSE_BENCH=OFF >/dev/null
+	@cmake --build build-opencv-bench -j $(JOBS) --target viewpose_opencv_ppf_bench
+	@./build-opencv-bench/viewpose_opencv_ppf_bench --json docs/results/opencv_ppf.json
 
 # The thesis's experiment and the real-data check, end to end: writes docs/RESULTS.md and its plots.
 results: build

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages viewpose needs to build, test and fuzz. Idempotent: packages that
 # are already installed are skipped, and apt-get runs only when something is missing.
-# Usage: scripts/install-deps.sh [build|fuzz|pcl|results]...   (default: build)
+# Usage: scripts/install-deps.sh [build|fuzz|pcl|opencv|results]...   (default: build)
 set -euo pipefail
 
 build_pkgs=(build-essential cmake pkg-config
@@ -12,6 +12,8 @@ build_pkgs=(build-essential cmake pkg-config
             libfreenect-dev libopenni2-dev)  # camera back-ends of viewpose live (libfreenect ships fakenect)
 fuzz_pkgs=(clang libclang-rt-dev libomp-dev)  # libFuzzer, sanitizer runtimes and OpenMP for clang
 pcl_pkgs=(libpcl-dev)               # only for the optional side-by-side benchmark
+opencv_pkgs=(libopencv-contrib-dev libopencv-dev)  # the optional point pair benchmark: surface_matching, and
+                                                    # OpenCVConfig.cmake (only libopencv-dev ships it)
 results_pkgs=(python3 python3-matplotlib python3-numpy)  # make results and fit-confidence: the report, its plots, the fit
 
 wanted=()
@@ -20,8 +22,9 @@ for group in "${@:-build}"; do
     build) wanted+=("${build_pkgs[@]}") ;;
     fuzz)  wanted+=("${build_pkgs[@]}" "${fuzz_pkgs[@]}") ;;
     pcl)   wanted+=("${pcl_pkgs[@]}") ;;
+    opencv) wanted+=("${opencv_pkgs[@]}") ;;
     results) wanted+=("${results_pkgs[@]}") ;;
-    *) echo "install-deps: unknown group '$group' (build, fuzz, pcl or results)" >&2; exit 2 ;;
+    *) echo "install-deps: unknown group '$group' (build, fuzz, pcl, opencv or results)" >&2; exit 2 ;;
   esac
 done
 
