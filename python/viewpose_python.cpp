@@ -103,8 +103,14 @@ PYBIND11_MODULE(viewpose, m) {
 
   py::class_<ViewDatabase, std::shared_ptr<ViewDatabase>>(m, "ViewDatabase",
                                                           "Every object rendered from a view sphere and described")
-      .def_static("load", [](const std::filesystem::path& path) { return std::make_shared<ViewDatabase>(ViewDatabase::load(path)); },
-                  py::arg("path"), "Reads a database `viewpose db build` (or save) wrote")
+      .def_static(
+          "load",
+          [](const std::filesystem::path& path, bool pair_tables) {
+            return std::make_shared<ViewDatabase>(ViewDatabase::load(path, {.pair_tables = pair_tables}));
+          },
+          py::arg("path"), py::kw_only(), py::arg("pair_tables") = true,
+          "Reads a database `viewpose db build` (or save) wrote; pair_tables=False leaves its point pair tables "
+          "unread, as `viewpose recognize --source vfh` does (a recognizer that votes makes any it needs)")
       .def("save", &ViewDatabase::save, py::arg("path"), "Writes the database (atomically)")
       .def_readonly("objects", &ViewDatabase::objects)
       .def_property_readonly("view_count", [](const ViewDatabase& db) { return db.views.size(); })

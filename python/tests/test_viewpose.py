@@ -120,6 +120,11 @@ def test_starting_poses_from_point_pair_votes_are_an_option(scene):
         assert np.linalg.norm(r[0].T_camera_object[:3, 3] - t_true) < 0.01, source
     with pytest.raises(ValueError, match="vfh, ppf, both, touching"):
         viewpose.Recognizer(db, source="sift")
+    # Without its pair tables (as `recognize --source vfh` reads it), the same poses: a recognizer
+    # that votes makes the tables it needs.
+    bare = viewpose.ViewDatabase.load(scene["db"], pair_tables=False)
+    r = viewpose.Recognizer(bare, source="touching").recognize(depth, K=scene["K"], depth_scale=scene["scale"])
+    assert [d.object_id for d in r] == [1]
 
 
 def test_the_recognizer_keeps_its_database(scene):

@@ -354,12 +354,16 @@ std::uint64_t payload_size(std::span<const std::uint8_t> bytes, const Reader& he
 FileParts file_parts(std::span<const std::uint8_t> bytes, std::uint64_t file_size, const Reader& header) {
   const std::uint64_t size = payload_size(bytes, header);
   const std::uint64_t after_header = file_size - kHeaderBytes;
-  std::uint64_t tables_size = 0;
-  if (size <= after_header && after_header - size >= kTablesHeaderBytes && bytes.size() >= kHeaderBytes + size + kTablesHeaderBytes) {
-    std::memcpy(&tables_size, bytes.data() + kHeaderBytes + size, 8);
-  }
-  if (size > after_header || after_header - size < kTablesHeaderBytes || tables_size != after_header - size - kTablesHeaderBytes) {
+  if (size > after_header || after_header - size < kTablesHeaderBytes) {
     header.fail(fmt::format("header says {} bytes of data but the file holds {} (truncated or padded)", size, after_header));
+  }
+  // (Less than that read: the file was replaced between two reads of it.)
+  if (bytes.size() < kHeaderBytes + size + kTablesHeaderBytes) header.fail("the file changed while it was read");
+  std::uint64_t tables_size = 0;
+  std::memcpy(&tables_size, bytes.data() + kHeaderBytes + size, 8);
+  if (tables_size != after_header - size - kTablesHeaderBytes) {
+    header.fail(fmt::format("the pair tables' header says {} bytes but the file holds {} after the views (truncated or padded)",
+                            tables_size, after_header - size - kTablesHeaderBytes));
   }
   FileParts parts;
   std::uint32_t crc;
@@ -395,8 +399,11 @@ ViewDatabase ViewDatabase::load(const std::filesystem::path& path, DatabaseLoadO
   std::vector<std::uint8_t> bytes = read_file_prefix(path, kHeaderBytes, kMaxFileBytes, file_size);
   const std::uint64_t size = payload_size(bytes, header);
   if (size <= file_size - kHeaderBytes) {
+    const std::uint64_t first_size = file_size;
     bytes = read_file_prefix(path, static_cast<std::size_t>(std::min(file_size, kHeaderBytes + size + kTablesHeaderBytes)), kMaxFileBytes,
                              file_size);
+    // A file replaced between the two reads (a `db build` renaming over it) is not mixed with the first.
+    if (file_size != first_size || payload_size(bytes, header) != size) header.fail("the file changed while it was read");
   }
   return read_payload(file_parts(bytes, file_size, header).payload, name);
 }

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <limits>
+#include <mutex>
 #include <numeric>
 
 #include <Eigen/Geometry>
@@ -143,9 +146,12 @@ OrientedPoints ppf_sample(std::span<const Eigen::Vector3f> points, std::span<con
 std::size_t PpfModel::key(int d, int a1, int a2, int a3) const { return key_of(feature_angle_bins_, d, a1, a2, a3); }
 
 void check_ppf_options(const PpfOptions& options) {
-  if (!(options.sample_fraction > 0 && options.sample_fraction < 1) || options.angle_bins < 4 ||
-      kAlphaUnits % static_cast<std::uint32_t>(options.angle_bins) != 0 || options.reference_stride < 1) {
-    throw Error("ppf: bad options (sample_fraction in (0, 1), angle_bins >= 4 dividing 13440, reference_stride >= 1)");
+  // (The table's keys, 4 bytes each, at most 2^24: 1/sample_fraction distance bins times (angle_bins / 2)^3.)
+  if (!(options.sample_fraction >= 1e-3 && options.sample_fraction < 1) || options.angle_bins < 4 ||
+      kAlphaUnits % static_cast<std::uint32_t>(options.angle_bins) != 0 || options.reference_stride < 1 ||
+      keys_of(options.sample_fraction, options.angle_bins) > (std::size_t{1} << 24)) {
+    throw Error("ppf: bad options (sample_fraction in [0.001, 1), angle_bins >= 4 dividing 13440, at most 2^24 feature bins, "
+                "reference_stride >= 1)");
   }
 }
 
@@ -183,8 +189,10 @@ PpfTable make_ppf_table(std::span<const Eigen::Vector3f> points, std::span<const
   };
   std::vector<Pairs> by_point(n);
   const float max_d = static_cast<float>(diameter_m);
+  std::exception_ptr failed;  // (an exception may not leave a parallel loop: the first is rethrown after it)
+  std::mutex failed_mutex;
 #pragma omp parallel for schedule(dynamic, 16)
-  for (std::ptrdiff_t pi = 0; pi < static_cast<std::ptrdiff_t>(n); ++pi) {
+  for (std::ptrdiff_t pi = 0; pi < static_cast<std::ptrdiff_t>(n); ++pi) try {
     const auto i = static_cast<std::size_t>(pi);
     Pairs& out = by_point[i];
     const Transform T_local_model = local_frame(t.sampled.points[i], t.sampled.normals[i]);
@@ -199,8 +207,19 @@ PpfTable make_ppf_table(std::span<const Eigen::Vector3f> points, std::span<const
       out.keys.push_back(static_cast<std::uint32_t>(key_of(feature_angle_bins, d, a(f.a1), a(f.a2), a(f.a3))));
       out.entries.push_back(PpfTable::entry(static_cast<std::uint32_t>(i), alpha_units(pair_alpha(T_local_model, t.sampled.points[j]))));
     }
+  } catch (...) {
+    const std::lock_guard lock(failed_mutex);
+    if (!failed) failed = std::current_exception();
+  }
+  if (failed) std::rethrow_exception(failed);
+  std::size_t pairs = 0;
+  for (const Pairs& p : by_point) pairs += p.keys.size();
+  if (pairs >= std::numeric_limits<std::uint32_t>::max()) {
+    throw Error("ppf: the model has too many pairs for a pair table (raise sample_fraction)");
   }
   std::vector<std::uint32_t> pair_key, pair_entry;
+  pair_key.reserve(pairs);
+  pair_entry.reserve(pairs);
   for (Pairs& p : by_point) {
     pair_key.insert(pair_key.end(), p.keys.begin(), p.keys.end());
     pair_entry.insert(pair_entry.end(), p.entries.begin(), p.entries.end());

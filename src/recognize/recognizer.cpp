@@ -758,6 +758,8 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
       if (out_of_time(out)) break;
       if (screen && regions.size() == 1 && !regions[0].screen_done && next[0] > 0) prescreen(regions[0], next[0], out);
       // The region whose next starting pose ranks best (the first of equals: parts come largest first).
+      // (Vote poses are in object-by-object order within a region, not best first: a region's next
+      // pose stands for it.)
       std::size_t r = regions.size();
       for (std::size_t i = 0; i < regions.size(); ++i) {
         if (next[i] < end[i] && (r == regions.size() || regions[i].candidates[next[i]].priority() > regions[r].candidates[next[r]].priority())) r = i;

@@ -201,7 +201,7 @@ TEST(ViewDatabaseTest, PairTablesAreStoredWithinTheirByteLimitAndReadBackWhole) 
   EXPECT_EQ(ViewDatabase::load(dir / "flipped.vpdb", {.pair_tables = false}).views.size(), db.views.size());
   file.resize(file.size() - 100);
   write_file_atomic(dir / "cut.vpdb", file);
-  expect_error([&] { ViewDatabase::load(dir / "cut.vpdb"); }, "truncated or padded");
+  expect_error([&] { ViewDatabase::load(dir / "cut.vpdb"); }, "the pair tables' header says");
   expect_error([&] { ViewDatabase::load(dir / "cut.vpdb", {.pair_tables = false}); }, "truncated or padded");
   file.resize(20);
   write_file_atomic(dir / "header.vpdb", file);

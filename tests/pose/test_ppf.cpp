@@ -180,6 +180,14 @@ TEST(Ppf, BadModelsAndOptionsAreRefusedInOneLine) {
   PpfOptions bad;
   bad.sample_fraction = 0;
   EXPECT_THROW(PpfModel(one, up, 0.1, bad), Error);
+  // Options whose table could not be made (a trillion distance bins; 6720^3 angle bins) are refused
+  // before anything is allocated.
+  bad.sample_fraction = 1e-12;
+  test::expect_error([&] { check_ppf_options(bad); }, "ppf: bad options");
+  bad = PpfOptions{};
+  bad.angle_bins = 13440;
+  test::expect_error([&] { check_ppf_options(bad); }, "at most 2^24 feature bins");
+  EXPECT_NO_THROW(check_ppf_options(PpfOptions{}));
 }
 
 }  // namespace

@@ -58,8 +58,9 @@ struct MatchOptions {
   /// at 0.10 s a frame median against 0.07 (docs/BENCHMARK.md, "Point pair votes"); votes cost
   /// about 15 ms per object and region, and are cast only where a detection leaves part of its region.
   PoseSource source = PoseSource::touching;
-  /// The pair tables and votes (with source ppf or both); each object's table is made when the
-  /// recognizer is (databases of up to RunOptions::prepare_objects_up_to objects) or on first use.
+  /// The pair tables and votes (every source but vfh). Each object's table is the database's where
+  /// it stores one made with these options (DatabaseParams::ppf), else made when the recognizer is
+  /// (ppf, both: databases of up to RunOptions::prepare_objects_up_to objects) or on first use.
   PpfOptions ppf{};
   std::size_t per_object = 20;  ///< nearest views per region and object (thesis: 20, one object)
   /// At most this many views per region in all, the nearest (each object at most `per_object`): with
