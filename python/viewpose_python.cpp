@@ -212,7 +212,7 @@ PYBIND11_MODULE(viewpose, m) {
            py::arg("db"), py::kw_only(), py::arg("keep_best") = false, py::arg("split_touching") = true,
            py::arg("matches") = RecognizerOptions{}.match.per_object,
            py::arg("budget") = RecognizerOptions{}.match.max_hypotheses, py::arg("screen") = RecognizerOptions{}.match.prescreen,
-           py::arg("source") = std::string(kPoseSourceNames[static_cast<int>(RecognizerOptions{}.match.source)]), py::arg("deadline_ms") = 0.0, py::arg("min_score") = py::none(),
+           py::arg("source") = std::string(pose_source_name(RecognizerOptions{}.match.source)), py::arg("deadline_ms") = 0.0, py::arg("min_score") = py::none(),
            "Options as `viewpose recognize` has them: keep_best, split_touching (--no-split is False), matches, "
            "budget (0: every starting pose), screen (0: coarse fit order only), source (\"vfh\", \"ppf\", \"both\" or \"touching\": where "
            "starting poses come from, --source), deadline_ms (0: none), min_score "

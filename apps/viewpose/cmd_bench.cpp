@@ -180,7 +180,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
     if (!o->db.empty()) {  // what a process run per file pays before its first frame
       const auto t = Clock::now();
       // (The pair tables only where the default source casts votes.)
-      db = ViewDatabase::load(o->db, {.pair_tables = RecognizerOptions{}.match.source != PoseSource::vfh});
+      db = ViewDatabase::load(o->db, database_load_options(RecognizerOptions{}));
       db_load_ms = ms_since(t);
     }
     std::vector<BenchFrame> frames;

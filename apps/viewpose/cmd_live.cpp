@@ -90,7 +90,7 @@ void add_live_command(CLI::App& app, int& exit_code) {
       }
     } restore_signals;
     // (The pair tables only where the default source casts votes.)
-    const ViewDatabase db = ViewDatabase::load(o->db, {.pair_tables = RecognizerOptions{}.match.source != PoseSource::vfh});
+    const ViewDatabase db = ViewDatabase::load(o->db, database_load_options(RecognizerOptions{}));
     RecognizerOptions options;
     options.split.enabled = !o->no_split;
     options.run.deadline_ms = o->deadline_ms;

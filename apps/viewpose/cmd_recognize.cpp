@@ -49,7 +49,7 @@ struct RecognizeFlags {
   std::size_t matches = 20;
   std::size_t budget = RecognizerOptions{}.match.max_hypotheses;
   std::size_t screen = RecognizerOptions{}.match.prescreen;
-  std::string source{kPoseSourceNames[static_cast<int>(RecognizerOptions{}.match.source)]};
+  std::string source{pose_source_name(RecognizerOptions{}.match.source)};
   double deadline_ms = 0;
   double min_score = -1;  // < 0: the recognizer's default
   bool no_times = false;
@@ -89,7 +89,7 @@ struct RecognizeFlags {
                  "depend on the inputs alone, byte for byte, whatever the thread count");
   }
   // The pair tables are read only where votes will be cast.
-  DatabaseLoadOptions load_options() const { return {.pair_tables = options().match.source != PoseSource::vfh}; }
+  DatabaseLoadOptions load_options() const { return database_load_options(options()); }
   RecognizerOptions options() const {
     RecognizerOptions o;
     o.accept.keep_best = keep_best;

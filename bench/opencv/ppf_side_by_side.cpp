@@ -52,7 +52,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
-#include <fstream>
 #include <memory>
 #include <random>
 #include <span>
@@ -72,6 +71,7 @@
 
 #include "viewpose/core/camera.hpp"
 #include "viewpose/core/depth_image.hpp"
+#include "viewpose/core/file.hpp"
 #include "viewpose/core/object_model.hpp"
 #include "viewpose/core/transform.hpp"
 #include "viewpose/database/view_database.hpp"
@@ -373,9 +373,7 @@ int run(int argc, char** argv) {
                            {"hypotheses", r.hypotheses},
                            {"best_of_1", to_json(r.top1)},
                            {"best_of_3", to_json(r.top3)}});
-    std::ofstream out(json_path);
-    if (!out) throw std::runtime_error(fmt::format("cannot write {}", json_path));
-    out << j.dump(2) << "\n";
+    write_file_atomic(json_path, j.dump(2) + "\n");  // (no half file if the run fails)
     fmt::print("wrote {}\n", json_path);
   }
   return 0;

@@ -533,7 +533,7 @@ TEST(Recognize, PointPairVotesAloneOrBesideTheViewsFindBothObjects) {
   EXPECT_THROW(Recognizer(db, bad), Error);
   // The sources' names, as the command line and the Python module take them.
   for (const PoseSource source : {PoseSource::vfh, PoseSource::ppf, PoseSource::both, PoseSource::touching}) {
-    EXPECT_EQ(pose_source_from_name(kPoseSourceNames[static_cast<int>(source)]), source);
+    EXPECT_EQ(pose_source_from_name(pose_source_name(source)), source);
   }
   test::expect_error([] { pose_source_from_name("PPF"); }, "source: \"PPF\" is none of vfh, ppf, both, touching");
 }

@@ -50,6 +50,8 @@ enum class PoseSource { vfh, ppf, both, touching };
 inline constexpr std::string_view kPoseSourceNames[] = {"vfh", "ppf", "both", "touching"};
 /// The source of that name; Error ("source: "x" is none of vfh, ppf, both, touching") for another.
 PoseSource pose_source_from_name(std::string_view name);
+/// The name of `source` (kPoseSourceNames).
+inline std::string_view pose_source_name(PoseSource source) { return kPoseSourceNames[static_cast<int>(source)]; }
 
 /// Which database views are tried for a region (a cluster, a convex part, what a detection left of
 /// a cluster), the poses each gives, and in what order they are refined and verified.
@@ -234,6 +236,12 @@ struct RecognizerOptions {
   SplitOptions split{};
   RunOptions run{};
 };
+
+/// What a recognizer with `options` needs read of a database: the pair tables only where its
+/// source casts votes.
+inline DatabaseLoadOptions database_load_options(const RecognizerOptions& options) {
+  return {.pair_tables = options.match.source != PoseSource::vfh};
+}
 
 struct Detection {
   int object_id = 0;
