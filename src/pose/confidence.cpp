@@ -23,7 +23,9 @@ ConfidenceFeatures confidence_features(const Verification& v) {
   return {v.inlier_fraction,
           v.conflict_fraction,
           v.unmeasured_fraction,
-          v.cluster_explained,
+          // A pose beside a touching neighbour is judged on the points within its silhouette: the
+          // neighbour's are no evidence against it (VerifyOptions::min_footprint_explained).
+          v.explained_beside_neighbour ? v.footprint_explained : v.cluster_explained,
           v.model_support,
           v.visible_fraction,
           v.outline_continuation,

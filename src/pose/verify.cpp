@@ -243,12 +243,14 @@ void judge_outline(const RenderedFrame& model, const JudgedWindow& w, const Dept
 
 // The other way round: the share of the cluster's points that lie on the model's surface (within
 // the depth tolerance and a pixel).
-double explained_share(std::span<const Eigen::Vector3f> cluster_points, const RenderedFrame& model, const JudgedWindow& w,
-                       const CameraIntrinsics& K, const VerifyOptions& o) {
+void explained_share(std::span<const Eigen::Vector3f> cluster_points, const RenderedFrame& model, const JudgedWindow& w,
+                     const CameraIntrinsics& K, const VerifyOptions& o, Verification& v) {
   const auto z_sample = [&](int xs, int ys) -> float {
     return (xs < 0 || ys < 0 || xs >= w.Kx.width || ys >= w.Kx.height) ? NAN : model.depth.at(xs, ys);
   };
-  std::size_t explained = 0, counted = 0;
+  std::size_t explained = 0, counted = 0, beside = 0;
+  // Beyond this many camera pixels of the model's silhouette a point is beside the object.
+  const int near = std::max(1, (o.beside_margin_px + w.step - 1) / w.step);
   for (const Eigen::Vector3f& p : cluster_points) {
     if (!p.allFinite() || !(p.z() > 0)) continue;
     ++counted;
@@ -266,8 +268,16 @@ double explained_share(std::span<const Eigen::Vector3f> cluster_points, const Re
         hit = std::isfinite(zm) && std::abs(zm - p.z()) <= tol;
       }
     explained += hit ? 1 : 0;
+    if (!hit) {
+      bool drawn = false;
+      for (int dv = -near; dv <= near && !drawn; dv += near)
+        for (int du = -near; du <= near && !drawn; du += near) drawn = std::isfinite(z_sample(us + du, ws + dv));
+      beside += drawn ? 0 : 1;
+    }
   }
-  return counted ? static_cast<double>(explained) / static_cast<double>(counted) : 0.0;
+  v.cluster_explained = counted ? static_cast<double>(explained) / static_cast<double>(counted) : 0.0;
+  v.cluster_beside = counted ? static_cast<double>(beside) / static_cast<double>(counted) : 0.0;
+  v.footprint_explained = counted > beside ? static_cast<double>(explained) / static_cast<double>(counted - beside) : 0.0;
 }
 
 // The counts (in samples) scaled to camera pixels, and the fractions the verdict is made of.
@@ -351,17 +361,25 @@ Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_obj
   const int reach_out = std::max(m + 3, (ms + 1) * step + 1);
   judge_outline(model, w, observed, K, ms, reach_out, o, v);
   summarize(sums, step, v);
-  v.cluster_explained = explained_share(cluster_points, model, w, K, o);
+  explained_share(cluster_points, model, w, K, o, v);
   v.score = v.inlier_fraction * v.cluster_explained;
+  v.explained_beside_neighbour = explained_beside_neighbour(v, o);
   v.accepted = passes(v, o);
   return v;
+}
+
+bool explained_beside_neighbour(const Verification& v, const VerifyOptions& o) {
+  return v.cluster_explained < o.min_cluster_explained && o.min_footprint_explained > 0 &&
+         v.footprint_explained >= std::max(o.min_footprint_explained, o.min_cluster_explained) &&
+         v.cluster_explained >= o.min_cluster_explained_beside && v.outline_continuation <= o.max_beside_outline_continuation;
 }
 
 bool passes(const Verification& v, const VerifyOptions& o) {
   const bool flat = v.model_relief_m < o.flat_relief_sigmas * axial_noise_sigma_frontal(std::max(0.3, v.mean_depth_m));
   if (flat && v.outline_continuation > o.max_flat_outline_continuation) return false;
   return v.inliers >= o.min_inliers && v.inlier_fraction >= o.min_inlier_fraction &&
-         v.conflict_fraction <= o.max_conflict_fraction && v.cluster_explained >= o.min_cluster_explained &&
+         v.conflict_fraction <= o.max_conflict_fraction &&
+         (v.cluster_explained >= o.min_cluster_explained || explained_beside_neighbour(v, o)) &&
          v.model_support >= o.min_model_support && v.visible_fraction >= o.min_visible_fraction &&
          v.unmeasured_fraction <= o.max_unmeasured_fraction && v.mean_depth_m <= o.max_depth_m;
 }

@@ -47,6 +47,22 @@ TEST(Confidence, FeaturesAreWhatVerificationMeasuredInTheSensorsUnits) {
   EXPECT_TRUE(std::isfinite(confidence_features(exact)[7]));
 }
 
+// An object beside a touching neighbour (VerifyOptions::min_footprint_explained) is judged on the
+// cluster's points within its silhouette: the neighbour's points beside it are no evidence against.
+TEST(Confidence, APoseBesideANeighbourWeighsThePointsWithinItsSilhouette) {
+  Verification beside = plainly_right();
+  beside.cluster_explained = 0.6;
+  beside.cluster_beside = 0.39;
+  beside.footprint_explained = 0.6 / 0.61;
+  const double as_measured = pose_confidence(beside);
+  beside.explained_beside_neighbour = true;
+  EXPECT_DOUBLE_EQ(confidence_features(beside)[3], beside.footprint_explained);
+  EXPECT_GT(pose_confidence(beside), as_measured);
+  Verification whole = plainly_right();
+  whole.cluster_explained = beside.footprint_explained;
+  EXPECT_DOUBLE_EQ(pose_confidence(beside), pose_confidence(whole));
+}
+
 TEST(Confidence, IsAProbabilityThatFollowsTheEvidence) {
   const Verification right = plainly_right();
   const double p = pose_confidence(right);

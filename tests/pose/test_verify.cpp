@@ -245,6 +245,68 @@ TEST(Verify, AFlatFaceIsAcceptedOnlyWhereItsOutlineStepsAway) {
   EXPECT_TRUE(s.check(s.T_camera_jug).accepted);
 }
 
+// An object touching something unknown shares a cluster with it (a jug with a can against its side,
+// as segmentation leaves them): the jug explains only its own part of the cluster, and the can's
+// points lie beside its silhouette. The right pose is accepted on the points within its silhouette;
+// a pose moved off it, or a model fitted to a patch of a larger surface (the wall carrying on all
+// round it), is not.
+TEST(Verify, AnObjectWithAnUnknownNeighbourIsJudgedOnThePointsWithinItsSilhouette) {
+  const CameraIntrinsics K = CameraIntrinsics::kinect_v1();
+  const TriangleMesh jug = make_jug(), can = make_can(0.07, 0.26), wall = test::square(4.0f);
+  const Transform T_camera_jug = make_transform(Eigen::AngleAxisd(-1.2, Eigen::Vector3d::UnitX()).toRotationMatrix(), {0.0, 0.0, 0.9});
+  // The can stands against the jug's side, a little behind it: one cluster in the depth image.
+  const Transform T_camera_can = make_transform(Eigen::AngleAxisd(-1.2, Eigen::Vector3d::UnitX()).toRotationMatrix(), {0.157, 0.0, 0.9});
+  const MeshInstance scene[] = {{&jug, T_camera_jug}, {&can, T_camera_can}, {&wall, make_transform(Eigen::Matrix3d::Identity(), {0, 0, 1.6})}};
+  const RenderedFrame f = render(scene, K, {});
+  const PointCloud cloud = depth_to_cloud(f.depth, K);
+  std::vector<Eigen::Vector3f> cluster;
+  std::size_t can_points = 0;
+  for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+    if (f.instance[i] == 0 || f.instance[i] == 1) cluster.push_back(cloud.points[i]);
+    can_points += f.instance[i] == 1;
+  }
+  ASSERT_GT(can_points, cluster.size() / 3);  // the neighbour is a large share of the cluster
+  const VerifyModel model{&jug, {}, 0.003f, closed_mesh_winding(jug), {}};
+  const Verification v = verify_pose(model, T_camera_jug, f.depth, K, cluster, {});
+  EXPECT_LT(v.cluster_explained, VerifyOptions{}.min_cluster_explained);
+  EXPECT_GT(v.cluster_beside, 0.3);
+  EXPECT_GT(v.footprint_explained, 0.96);  // (the can's points within the margin of the silhouette are not beside it)
+  EXPECT_LT(v.outline_continuation, 0.5);
+  EXPECT_TRUE(v.explained_beside_neighbour);
+  EXPECT_TRUE(v.accepted);
+  VerifyOptions whole_cluster;  // the bound on the whole cluster alone refuses it
+  whole_cluster.min_footprint_explained = 0;
+  EXPECT_FALSE(verify_pose(model, T_camera_jug, f.depth, K, cluster, whole_cluster).accepted);
+  // 2 cm off to the side, the jug's own points within the silhouette are left unexplained.
+  const Transform aside = make_transform(Eigen::Matrix3d::Identity(), {-0.02, 0, 0}) * T_camera_jug;
+  const Verification off = verify_pose(model, aside, f.depth, K, cluster, {});
+  EXPECT_LT(off.footprint_explained, VerifyOptions{}.min_footprint_explained);
+  EXPECT_FALSE(off.accepted);
+
+  // A box face flush with a wall, its cluster the whole patch of wall around it: the points within
+  // the face's silhouette are explained and the rest lies beside it, but the wall carries on all
+  // round the outline: a patch of a larger thing, not an object beside a neighbour. (The bound for
+  // flat faces is lifted, and the footprint's loosened for the wall just past the silhouette: this
+  // is the neighbour rule's own outline test.)
+  const FaceOnWall flush(1.2, SensorModel::ideal());
+  std::vector<Eigen::Vector3f> patch;
+  for (const Eigen::Vector3f& p : depth_to_cloud(flush.depth, flush.K).points)
+    if (p.allFinite() && std::abs(p.x() - 0.02f) < 0.15f && std::abs(p.y() + 0.01f) < 0.11f) patch.push_back(p);
+  VerifyOptions lenient;
+  lenient.max_flat_outline_continuation = 1.0;
+  lenient.min_footprint_explained = 0.85;
+  const VerifyModel box{&flush.box, {}, 0.003f, closed_mesh_winding(flush.box), {}};
+  const Verification face = verify_pose(box, flush.T_camera_box, flush.depth, flush.K, patch, lenient);
+  EXPECT_LT(face.cluster_explained, 0.7);
+  EXPECT_GT(face.cluster_beside, 0.3);
+  EXPECT_GT(face.footprint_explained, lenient.min_footprint_explained);
+  EXPECT_GT(face.outline_continuation, 0.9);
+  EXPECT_FALSE(face.explained_beside_neighbour);
+  EXPECT_FALSE(face.accepted);
+  lenient.max_beside_outline_continuation = 1.0;
+  EXPECT_TRUE(verify_pose(box, flush.T_camera_box, flush.depth, flush.K, patch, lenient).accepted);  // the outline refused it
+}
+
 // Model against plane: the jug's visible surface has relief, and where the jug is truly there the
 // observed points have it too; a flat face on a flat wall has none either way.
 TEST(Verify, ModelAndPlaneResidualsTellACurvedSurfaceFromAFlatOne) {
