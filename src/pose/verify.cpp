@@ -270,8 +270,8 @@ void explained_share(std::span<const Eigen::Vector3f> cluster_points, const Rend
     explained += hit ? 1 : 0;
     if (!hit) {
       bool drawn = false;
-      for (int dv = -near; dv <= near && !drawn; dv += near)
-        for (int du = -near; du <= near && !drawn; du += near) drawn = std::isfinite(z_sample(us + du, ws + dv));
+      for (int dv = -near; dv <= near && !drawn; ++dv)
+        for (int du = -near; du <= near && !drawn; ++du) drawn = std::isfinite(z_sample(us + du, ws + dv));
       beside += drawn ? 0 : 1;
     }
   }

@@ -264,7 +264,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   // first. Two objects side by side span at most twice the largest object.
   if (!options_.split.enabled || depth >= options_.split.max_depth ||
       size > options_.split.max_size_factor * largest_diameter_m_ || out_of_time(out)) {
-    if (partial && options_.split.enabled && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth);
+    if (partial && options_.split.enabled && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
     return;
   }
   auto t = Clock::now();
@@ -272,7 +272,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   out.times.split_ms += ms_since(t);
   // One part that is nearly the whole region has been tried already.
   if (parts.empty() || (parts.size() == 1 && parts[0].size() > 0.9 * static_cast<double>(points.size()))) {
-    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth);
+    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
     return;
   }
   ++out.split_clusters;
@@ -290,7 +290,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
     // No part passed alone: a pose that explains part of the region (or of a part) well, and
     // whatever the rest of the region is.
     if (!partial || (part_partial && part_partial->verification.score > partial->verification.score)) partial = std::move(part_partial);
-    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth);
+    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
     return;
   }
   det->from_split_cluster = true;
@@ -298,7 +298,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
 }
 
 void Recognizer::explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,
-                                 Recognition& out, int depth) const {
+                                 Recognition& out, int depth, bool votes) const {
   const auto t = Clock::now();
   std::vector<char> explained = explained_points(partial, points);
   out.times.split_ms += ms_since(t);
@@ -306,12 +306,11 @@ void Recognizer::explain_jointly(const PointCloud& points, const Detection& part
     if (out_of_time(out)) return;
     const PointCloud rest_points = cluster_points(points, c);
     if (bounding_box(rest_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
-    // The rest is searched with the views' poses, and with the votes' only where every region gets
-    // them (both; ppf's candidates are votes anyway): a kept pose is not yet a detection, and with
-    // `touching` votes cast in the rest of every such pose were most of a frame of unknown things'
-    // time (real mOSD frames: 58 -> 41 ms median without them), finding nothing more on any set of
-    // make results.
-    std::optional<Detection> other = recognize_cluster(rest_points, frame, verify, out, nullptr, options_.match.source == PoseSource::both);
+    // The rest is searched as the region was (`votes`: both everywhere, touching in what a
+    // detection left): a kept pose is not yet a detection, and with `touching` votes cast in the
+    // rest of every such pose in a whole cluster were most of a frame of unknown things' time (real
+    // mOSD frames: 59 -> 41 ms median without them), finding nothing more on any set of make results.
+    std::optional<Detection> other = recognize_cluster(rest_points, frame, verify, out, nullptr, votes);
     if (!other) continue;
     // The kept pose on what the other leaves of the region: its own share, judged as a part.
     const auto tv = Clock::now();

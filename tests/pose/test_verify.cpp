@@ -277,6 +277,22 @@ TEST(Verify, AnObjectWithAnUnknownNeighbourIsJudgedOnThePointsWithinItsSilhouett
   VerifyOptions whole_cluster;  // the bound on the whole cluster alone refuses it
   whole_cluster.min_footprint_explained = 0;
   EXPECT_FALSE(verify_pose(model, T_camera_jug, f.depth, K, cluster, whole_cluster).accepted);
+  // Each of the rule's bounds refuses it alone: the whole cluster's floor, a footprint share
+  // stricter than the cluster bound asked of the footprint (as in a convex part, tightened), and
+  // the margin: counted within 30 px of the silhouette, the can's nearest points are no longer
+  // beside the jug but unexplained within its footprint.
+  VerifyOptions floor_above;
+  floor_above.min_cluster_explained_beside = v.cluster_explained + 0.01;
+  EXPECT_FALSE(verify_pose(model, T_camera_jug, f.depth, K, cluster, floor_above).accepted);
+  VerifyOptions strict_part;
+  strict_part.min_cluster_explained = v.footprint_explained + 0.005;
+  EXPECT_FALSE(verify_pose(model, T_camera_jug, f.depth, K, cluster, strict_part).accepted);
+  VerifyOptions wide_margin;
+  wide_margin.beside_margin_px = 30;
+  const Verification wide = verify_pose(model, T_camera_jug, f.depth, K, cluster, wide_margin);
+  EXPECT_LT(wide.cluster_beside, v.cluster_beside - 0.05);
+  EXPECT_LT(wide.footprint_explained, wide_margin.min_footprint_explained);
+  EXPECT_FALSE(wide.accepted);
   // 2 cm off to the side, the jug's own points within the silhouette are left unexplained.
   const Transform aside = make_transform(Eigen::Matrix3d::Identity(), {-0.02, 0, 0}) * T_camera_jug;
   const Verification off = verify_pose(model, aside, f.depth, K, cluster, {});

@@ -104,8 +104,10 @@ struct MatchOptions {
   /// Skip the views of objects too small to explain a region: verification wants
   /// verify.min_cluster_explained of its points on the model's surface, and no object can cover
   /// points spread wider than its diameter (plus the depth tolerance and a few pixels each side;
-  /// core_width). Changes no result, only what is tried: a large unknown thing (a box, a monitor)
-  /// is not tried against every small object's views.
+  /// core_width). Changes only what is tried: a large unknown thing (a box, a monitor) is not tried
+  /// against every small object's views. (A pose beside a touching neighbour may explain less than
+  /// that share, VerifyOptions::min_footprint_explained; the objects narrower than the region are
+  /// still skipped: such a pose is looked for among the objects as wide as the region's core.)
   bool skip_objects_too_small = true;
   /// Skip the views that show far more surface than the region has: verification wants
   /// min_visible_fraction (0.4) of the model's judged pixels measured on it and min_model_support
@@ -178,7 +180,10 @@ struct SplitOptions {
   /// aside; if nothing passes in the region, its points are explained away and the rest searched, and
   /// when the rest gives a detection, the kept pose is verified again on the points that detection
   /// leaves, with the part bounds above. Both are reported only together: two poses that explain
-  /// the region between them (0: not tried).
+  /// the region between them (0: not tried). A pose whose unexplained points all lie beside its
+  /// silhouette passes alone (VerifyOptions::min_footprint_explained: the neighbour is unknown), in
+  /// parts too: the part bounds tighten the footprint's share, inliers and unmeasured pixels, while
+  /// its whole-region floor stays min_cluster_explained_beside.
   double joint_min_cluster_explained = 0.3;
 };
 
@@ -358,9 +363,10 @@ class Recognizer {
                                   std::optional<Detection>* partial = nullptr, bool votes = false) const;
   // `partial`'s points taken out of `points` and the rest searched; when the rest gives a detection
   // and `partial`, verified again on the points that one leaves, passes `verify`, both are added,
-  // and what neither explains is recognized again (depth + 1).
+  // and what neither explains is recognized again (depth + 1). The rest is searched with the votes'
+  // poses as well where the region was (`votes`).
   void explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,
-                       Recognition& out, int depth) const;
+                       Recognition& out, int depth, bool votes) const;
   // Every roll of every matched view (and with PoseSource ppf or both, every pose the pair votes give)
   // as a starting pose, best coarse fit first.
   std::vector<Candidate> rank_candidates(const Region& region, Recognition& out) const;
