@@ -269,9 +269,13 @@ void explained_share(std::span<const Eigen::Vector3f> cluster_points, const Rend
       }
     explained += hit ? 1 : 0;
     if (!hit) {
+      // Drawn within `near` samples? Only the samples inside the window are looked at: most points
+      // beside the model lie far outside it, and cost no look-up at all.
       bool drawn = false;
-      for (int dv = -near; dv <= near && !drawn; ++dv)
-        for (int du = -near; du <= near && !drawn; ++du) drawn = std::isfinite(z_sample(us + du, ws + dv));
+      const int u_lo = std::max(us - near, 0), u_hi = std::min(us + near, w.Kx.width - 1);
+      const int v_lo = std::max(ws - near, 0), v_hi = std::min(ws + near, w.Kx.height - 1);
+      for (int vs = v_lo; vs <= v_hi && !drawn; ++vs)
+        for (int u = u_lo; u <= u_hi && !drawn; ++u) drawn = std::isfinite(model.depth.at(u, vs));
       beside += drawn ? 0 : 1;
     }
   }
