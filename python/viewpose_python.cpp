@@ -169,6 +169,7 @@ PYBIND11_MODULE(viewpose, m) {
       .def_readonly("hypotheses", &Recognition::hypotheses)
       .def_readonly("repeats", &Recognition::repeats)
       .def_readonly("screened", &Recognition::screened)
+      .def_readonly("screened_out", &Recognition::screened_out)
       .def_readonly("regions", &Recognition::regions)
       .def_property_readonly("times_ms",
                              [](const Recognition& r) {

@@ -103,6 +103,7 @@ def test_a_budget_of_starting_poses_is_an_option(scene):
     assert len(unscreened) == 1 and unscreened.screened == 0
     screened = viewpose.Recognizer(db, budget=8, screen=16).recognize(depth, K=scene["K"])
     assert len(screened) == 1 and screened.screened <= 16 * screened.regions
+    assert 0 <= screened.screened_out <= screened.screened and unscreened.screened_out == 0
     with pytest.raises(TypeError):
         viewpose.Recognizer(db, budget=-1)
     with pytest.raises(TypeError):

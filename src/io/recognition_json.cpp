@@ -36,7 +36,7 @@ nlohmann::json recognition_json(const Recognition& r, bool with_times) {
                     {"verification", verification_json(d.verification)}});
   }
   nlohmann::json j = {{"detections", dets}, {"cut_short", r.cut_short}, {"clusters", r.clusters},
-                      {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses}, {"repeats", r.repeats}, {"screened", r.screened},
+                      {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"hypotheses", r.hypotheses}, {"repeats", r.repeats}, {"screened", r.screened}, {"screened_out", r.screened_out},
                       {"dropped_as_explained", r.dropped_as_explained}};
   if (with_times) {
     const StageTimes& t = r.times;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -337,18 +338,23 @@ SeenThrough seen_through(std::span<const Eigen::Vector3f> points, std::span<cons
   return s;
 }
 
+std::optional<double> seen_through_quickly(const VerifyModel& shape, const Transform& T_camera_object, const DepthImage& observed,
+                                           const CameraIntrinsics& K, const VerifyOptions& o) {
+  if (!(o.quick_max_seen_through < 1)) return std::nullopt;
+  const SeenThrough quick = seen_through(shape.points, shape.normals, T_camera_object, observed, K, o, o.quick_points);
+  if (quick.judged >= o.quick_min_judged && quick.fraction() > o.quick_max_seen_through) return quick.fraction();
+  return std::nullopt;
+}
+
 Verification verify_pose(const VerifyModel& shape, const Transform& T_camera_object, const DepthImage& observed,
                          const CameraIntrinsics& K, std::span<const Eigen::Vector3f> cluster_points,
                          const VerifyOptions& o) {
   Verification v;
-  if (o.quick_max_seen_through < 1) {
-    const SeenThrough quick = seen_through(shape.points, shape.normals, T_camera_object, observed, K, o, o.quick_points);
-    if (quick.judged >= o.quick_min_judged && quick.fraction() > o.quick_max_seen_through) {
-      v.refused_quickly = true;
-      v.conflict_fraction = quick.fraction();
-      v.inlier_fraction = 1 - quick.fraction();
-      return v;
-    }
+  if (const std::optional<double> share = seen_through_quickly(shape, T_camera_object, observed, K, o)) {
+    v.refused_quickly = true;
+    v.conflict_fraction = *share;
+    v.inlier_fraction = 1 - *share;
+    return v;
   }
   const JudgedWindow w = judged_window(shape, T_camera_object, K, o);
   v.pixel_step = w.step;

@@ -197,6 +197,7 @@ void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   out.hypotheses += part.hypotheses;
   out.repeats += part.repeats;
   out.screened += part.screened;
+  out.screened_out += part.screened_out;
   out.split_clusters += part.split_clusters;
   out.regions += part.regions;
   out.dropped_as_explained += part.dropped_as_explained;
@@ -513,6 +514,7 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
     target.grid(options_.icp.grid_cell_m, options_.icp.reach_m());
     const IcpResult r = icp_point_to_plane(region.icp_source, target, c.T_camera_object.inverse(), screen_icp_);
     c.screen_fitness = icp_fitness(region.icp_source, target, r.T_target_source, screen_reach_m_, screen_icp_);
+    c.T_screened = r.T_target_source.inverse();
   }
   // Best screened first; equals keep their coarse-fit order. The unscreened rest keep theirs after.
   std::stable_sort(first, first + count, [](const Candidate& a, const Candidate& b) { return a.screen_fitness > b.screen_fitness; });
@@ -521,6 +523,15 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
   }
   out.screened += n;
   out.times.icp_ms += ms_since(t);
+}
+
+bool Recognizer::seen_through_after_screen(const Region& region, const Candidate& c, const Frame& frame) const {
+  // The cheapest test of verification, where the screen led the pose: measured on every set of
+  // make results and the real negatives, no pose that went on to pass verification's bounds was
+  // seen through at more than 0.36 of its points there (the test refuses above 0.5), while about
+  // half of those refined in full were (real YCB-Video 54 %, rooms 46 %).
+  if (c.screen_fitness < 0) return false;
+  return seen_through_quickly(verify_model(c.object), c.T_screened, frame.depth, frame.K, region.verify).has_value();
 }
 
 std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& region, Recognition& out) const {
@@ -679,6 +690,10 @@ void Recognizer::challenge(const Region& region, std::size_t next, std::size_t e
   for (std::size_t i = next; i < end; ++i) {
     const std::uint32_t object = region.candidates[i].object;
     if (object == best.object_index || tried[object]++ >= options_.match.challenger_views) continue;
+    if (seen_through_after_screen(region, region.candidates[i], frame)) {
+      ++out.screened_out;
+      continue;
+    }
     which.push_back(i);
   }
   const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
@@ -770,7 +785,12 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
       }
       if (r == regions.size()) break;
       which.clear();
-      for (; next[r] < end[r] && which.size() < batch && spent < budget; ++next[r], ++spent) which.push_back(next[r]);
+      // (A pose the screen refused spends its share of the budget unrefined.)
+      for (; next[r] < end[r] && which.size() < batch && spent < budget; ++next[r], ++spent) {
+        if (!seen_through_after_screen(regions[r], regions[r].candidates[next[r]], frame)) which.push_back(next[r]);
+        else ++out.screened_out;
+      }
+      if (which.empty()) continue;
       std::optional<Detection> det = try_candidates(regions[r], which, options_.accept.keep_best, frame, out);
       if (det && (!best || det->verification.score > best->verification.score)) {
         best = std::move(det);

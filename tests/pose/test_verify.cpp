@@ -2,6 +2,7 @@
 // that pose, and at poses moved off it, where the frame contradicts the model.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -136,6 +137,7 @@ TEST(Verify, APoseRefusedQuicklyIsNeverOneTheFullTestAccepts) {
   const Verification right = verify_pose(model, s.T_camera_jug, s.depth, s.K, s.cluster);
   EXPECT_TRUE(right.accepted);
   EXPECT_FALSE(right.refused_quickly);
+  EXPECT_FALSE(seen_through_quickly(model, s.T_camera_jug, s.depth, s.K, VerifyOptions{}));
   // Misplaced by 2 to 20 cm across the line of sight: whenever the quick test refuses, the full
   // test refuses too, and the far-off poses are refused quickly.
   int refused_quickly = 0;
@@ -144,6 +146,13 @@ TEST(Verify, APoseRefusedQuicklyIsNeverOneTheFullTestAccepts) {
     const Verification quick = verify_pose(model, s.moved(dx, 0, 0), s.depth, s.K, s.cluster);
     const Verification full = verify_pose(model, s.moved(dx, 0, 0), s.depth, s.K, s.cluster, full_only);
     EXPECT_FALSE(full.refused_quickly);
+    // The quick test alone (what the recognizer's screen asks) gives the same verdict and share.
+    const std::optional<double> alone = seen_through_quickly(model, s.moved(dx, 0, 0), s.depth, s.K, VerifyOptions{});
+    EXPECT_EQ(alone.has_value(), quick.refused_quickly);
+    if (alone) {
+      EXPECT_EQ(*alone, quick.conflict_fraction);
+    }
+    EXPECT_FALSE(seen_through_quickly(model, s.moved(dx, 0, 0), s.depth, s.K, full_only));
     EXPECT_FALSE(quick.accepted);
     EXPECT_FALSE(full.accepted);
     if (quick.refused_quickly) {

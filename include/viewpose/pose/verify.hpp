@@ -11,6 +11,7 @@
 // and the scene cluster must be explained by the model in turn. These are the cues PCL's GHV meant
 // to weigh (explained scene points, visible model outliers, clutter, occlusion), for one
 // hypothesis at a time, without GHV's inverted normal filter.
+#include <optional>
 #include <span>
 
 #include "viewpose/core/camera.hpp"
@@ -167,6 +168,13 @@ struct VerifyModel {
   int closed_winding = 0;  ///< closed_mesh_winding(*mesh): a closed mesh is drawn without its back faces
   std::span<const Eigen::Vector3f> normals;  ///< the points' normals (either sign; none: not known)
 };
+
+/// verify_pose's quick test alone (VerifyOptions::quick_max_seen_through): the share of the
+/// model's judged points the camera sees past at this pose, when it refuses the pose (more than
+/// that share, of at least quick_min_judged points); nothing when it does not. The recognizer's
+/// screen applies it where its short ICP leads a starting pose (MatchOptions::prescreen).
+std::optional<double> seen_through_quickly(const VerifyModel& model, const Transform& T_camera_object, const DepthImage& observed,
+                                           const CameraIntrinsics& K, const VerifyOptions& options);
 
 Verification verify_pose(const VerifyModel& model, const Transform& T_camera_object, const DepthImage& observed,
                          const CameraIntrinsics& K, std::span<const Eigen::Vector3f> cluster_points,
