@@ -8,6 +8,8 @@
 #include <limits>
 #include <span>
 
+#include <omp.h>
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -23,6 +25,31 @@
 #include "viewpose/segment/voxel_grid.hpp"
 
 namespace viewpose {
+
+namespace {
+
+// body(i) for every i in [0, n), on several threads when `parallel`. Within a parallel region (a
+// frame's clusters searched side by side, RunOptions::parallel_clusters) as tasks of `grain`
+// indices, which a thread with no cluster left takes up: a frame's largest cluster is often most
+// of its work, and its stages no longer run on one thread while the other waits. (A thread that
+// waits for its own tasks runs only those.) Outside one, a parallel loop of its own. Each index
+// once, its result kept by index: the same whichever thread runs it.
+template <class Body>
+void for_each_index(std::ptrdiff_t n, bool parallel, std::ptrdiff_t grain, const Body& body) {
+  if (!parallel || n <= 1) {
+    for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
+    return;
+  }
+  if (omp_in_parallel()) {
+#pragma omp taskloop grainsize(grain) shared(body)
+    for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
+  } else {
+#pragma omp parallel for schedule(dynamic, grain)
+    for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
+  }
+}
+
+}  // namespace
 
 PoseSource pose_source_from_name(std::string_view name) {
   for (std::size_t i = 0; i < std::size(kPoseSourceNames); ++i) {
@@ -175,14 +202,16 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     std::vector<std::size_t> order(n);
     for (std::size_t c = 0; c < n; ++c) order[c] = c;
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return seg.clusters[a].size() > seg.clusters[b].size(); });
-    const auto count = static_cast<std::ptrdiff_t>(n);
-#pragma omp parallel for schedule(dynamic, 1)
-    for (std::ptrdiff_t k = 0; k < count; ++k) {
-      const std::size_t c = order[static_cast<std::size_t>(k)];
-      Recognition& part = parts[c];
-      part.started = start;
-      if (out_of_time(part)) continue;
-      recognize_region(cluster_points(seg.points, seg.clusters[c]), frame, part, 0);
+    // Each cluster a task: a thread with no cluster left takes up the tasks of another's stages.
+#pragma omp parallel
+#pragma omp single
+    for (const std::size_t c : order) {
+#pragma omp task firstprivate(c) shared(parts, seg, frame, start)
+      {
+        Recognition& part = parts[c];
+        part.started = start;
+        if (!out_of_time(part)) recognize_region(cluster_points(seg.points, seg.clusters[c]), frame, part, 0);
+      }
     }
     for (Recognition& part : parts) merge_part(std::move(part), out);
   }
@@ -416,24 +445,23 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const H
   for (const Hypothesis& h : hypotheses) prepared(h.object);
   const auto start = Clock::now();
   const auto n = static_cast<std::ptrdiff_t>(out.size());
-#pragma omp parallel for schedule(dynamic, 1) if (options_.run.parallel_hypotheses && n > 1)
-  for (std::ptrdiff_t k = 0; k < n; ++k) {
+  for_each_index(n, options_.run.parallel_hypotheses, 1, [&](std::ptrdiff_t k) {
     Refined& h = out[static_cast<std::size_t>(k)];
     const Hypothesis& hypothesis = hypotheses[static_cast<std::size_t>(k)];
     auto t = Clock::now();
     h.icp = icp_point_to_plane(icp_source, icp_target(hypothesis.object), hypothesis.T_camera_object.inverse(), options_.icp);
     h.icp_ms = ms_since(t);
     h.T_camera_object = h.icp.T_target_source.inverse();
-    if (h.icp.fitness < options_.icp.min_fitness_after_first_stage) continue;  // ICP lost the object
+    if (h.icp.fitness < options_.icp.min_fitness_after_first_stage) return;  // ICP lost the object
     if (is_refused(hypothesis.object, h.T_camera_object)) {
       h.repeat = true;
-      continue;
+      return;
     }
     t = Clock::now();
     h.v = verify_pose(verify_model(hypothesis.object), h.T_camera_object, frame.depth, frame.K, cluster, verify);
     h.verify_ms = ms_since(t);
     h.verified = true;
-  }
+  });
   // Taken in order: the confidence of each pose verification passed, and what the caller hears of it.
   for (std::size_t k = 0; k < out.size(); ++k) {
     Refined& h = out[k];
@@ -506,8 +534,7 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
   const auto first = region.candidates.begin() + static_cast<std::ptrdiff_t>(from);
   for (auto c = first; c != first + static_cast<std::ptrdiff_t>(n); ++c) prepared(c->object);  // (each object once)
   const auto count = static_cast<std::ptrdiff_t>(n);
-#pragma omp parallel for schedule(dynamic, 4) if (options_.run.parallel_hypotheses)
-  for (std::ptrdiff_t k = 0; k < count; ++k) {
+  for_each_index(count, options_.run.parallel_hypotheses, 4, [&](std::ptrdiff_t k) {
     Candidate& c = first[k];
     const IcpTarget& target = icp_target(c.object);
     // The grid keeps the sizes of its first use: the full schedule's reach, not the screen's.
@@ -515,7 +542,7 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
     const IcpResult r = icp_point_to_plane(region.icp_source, target, c.T_camera_object.inverse(), screen_icp_);
     c.screen_fitness = icp_fitness(region.icp_source, target, r.T_target_source, screen_reach_m_, screen_icp_);
     c.T_screened = r.T_target_source.inverse();
-  }
+  });
   // Best screened first; equals keep their coarse-fit order. The unscreened rest keep theirs after.
   std::stable_sort(first, first + count, [](const Candidate& a, const Candidate& b) { return a.screen_fitness > b.screen_fitness; });
   if (std::all_of(first, first + count, [](const Candidate& c) { return c.match == Candidate::kFromPairVotes; })) {
@@ -540,13 +567,12 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
   // Each view's rolls; views of objects too small for the region give none.
   std::vector<std::vector<float>> rolls(region.matches.size());
   const auto n = static_cast<std::ptrdiff_t>(region.matches.size());
-#pragma omp parallel for schedule(static) if (options_.run.parallel_hypotheses && n > 8)
-  for (std::ptrdiff_t m = 0; m < n; ++m) {
+  for_each_index(n, options_.run.parallel_hypotheses && n > 8, 16, [&](std::ptrdiff_t m) {
     const ViewEntry& view = db_.views[region.matches[static_cast<std::size_t>(m)].view];
-    if (db_.objects[view.object].diameter_m < region.smallest_diameter) continue;
-    if (static_cast<double>(view.icp_points.size()) * options_.match.min_region_to_view > region.icp_points_dense) continue;
+    if (db_.objects[view.object].diameter_m < region.smallest_diameter) return;
+    if (static_cast<double>(view.icp_points.size()) * options_.match.min_region_to_view > region.icp_points_dense) return;
     rolls[static_cast<std::size_t>(m)] = crh_roll_angles(view.crh, d.crh, options_.match.roll);
-  }
+  });
   out.times.crh_ms += ms_since(t0);
   const auto t1 = Clock::now();
   std::vector<Candidate> candidates;
@@ -560,13 +586,12 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
   const OccupancyGrid region_grid(region.icp_source, options_.match.fit_cell_m);
   for (Candidate& c : candidates) prepared(c.object);  // (each object once)
   const auto count = static_cast<std::ptrdiff_t>(candidates.size());
-#pragma omp parallel for schedule(static) if (options_.run.parallel_hypotheses && count > 64)
-  for (std::ptrdiff_t k = 0; k < count; ++k) {
+  for_each_index(count, options_.run.parallel_hypotheses && count > 64, 32, [&](std::ptrdiff_t k) {
     Candidate& c = candidates[static_cast<std::size_t>(k)];
     const ViewEntry& view = db_.views[region.matches[c.match].view];
     const CoarseFitInputs in{region.icp_source, &region_grid, view.icp_points, &prepared(c.object).occupancy};
     c.fit = coarse_fit(in, c.T_camera_object * view.T_view_object.inverse(), c.T_camera_object, options_.match.fit_points);
-  }
+  });
   if (options_.match.source == PoseSource::ppf) {
     for (Candidate& c : pair_vote_candidates(region, region_grid)) candidates.push_back(c);
   }
@@ -584,13 +609,12 @@ std::vector<Recognizer::Candidate> Recognizer::pair_vote_candidates(const Region
   for (std::uint32_t o = 0; o < db_.objects.size(); ++o) {
     if (db_.objects[o].diameter_m >= region.smallest_diameter) prepared(o), pair_table(o);  // (each once, before the threads)
   }
-#pragma omp parallel for schedule(dynamic, 1) if (options_.run.parallel_hypotheses && objects > 1)
-  for (std::ptrdiff_t k = 0; k < objects; ++k) {
+  for_each_index(objects, options_.run.parallel_hypotheses, 1, [&](std::ptrdiff_t k) {
     const auto o = static_cast<std::uint32_t>(k);
     const DatabaseObject& object = db_.objects[o];
-    if (object.diameter_m < region.smallest_diameter) continue;
+    if (object.diameter_m < region.smallest_diameter) return;
     const PpfModel* found = pair_table(o);
-    if (!found) continue;
+    if (!found) return;
     const PpfModel& table = *found;
     // The region sampled as the object's table was, at its own step (a share of its diameter).
     const OrientedPoints scene = ppf_sample(d.cloud.points, d.cloud.normals, table.sample_step_m(), table.normal_split_deg());
@@ -599,7 +623,7 @@ std::vector<Recognizer::Candidate> Recognizer::pair_vote_candidates(const Region
                                            prepared(o).occupancy, h.T_camera_object, options_.match.fit_points);
       by_object[o].push_back({Candidate::kFromPairVotes, o, 0.0f, h.T_camera_object, fit});
     }
-  }
+  });
   std::vector<Candidate> all;
   for (const std::vector<Candidate>& c : by_object) all.insert(all.end(), c.begin(), c.end());
   return all;
