@@ -809,8 +809,10 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
       }
       if (r == regions.size()) break;
       which.clear();
-      // (A pose the screen refused spends its share of the budget unrefined.)
-      for (; next[r] < end[r] && which.size() < batch && spent < budget; ++next[r], ++spent) {
+      // A batch is `batch` places in the order: a pose the screen refused keeps its place and
+      // spends its share of the budget unrefined (the next batch is chosen across the regions
+      // again, as if it had been refined).
+      for (std::size_t taken = 0; next[r] < end[r] && taken < batch && spent < budget; ++next[r], ++spent, ++taken) {
         if (!seen_through_after_screen(regions[r], regions[r].candidates[next[r]], frame)) which.push_back(next[r]);
         else ++out.screened_out;
       }

@@ -149,6 +149,8 @@ TEST(Verify, APoseRefusedQuicklyIsNeverOneTheFullTestAccepts) {
     // The quick test alone (what the recognizer's screen asks) gives the same verdict and share.
     const std::optional<double> alone = seen_through_quickly(model, s.moved(dx, 0, 0), s.depth, s.K, VerifyOptions{});
     EXPECT_EQ(alone.has_value(), quick.refused_quickly);
+    const SeenThrough share = seen_through(points, normals, s.moved(dx, 0, 0), s.depth, s.K, VerifyOptions{}, VerifyOptions{}.quick_points);
+    EXPECT_EQ(alone.has_value(), share.judged >= VerifyOptions{}.quick_min_judged && share.fraction() > VerifyOptions{}.quick_max_seen_through);
     if (alone) {
       EXPECT_EQ(*alone, quick.conflict_fraction);
     }

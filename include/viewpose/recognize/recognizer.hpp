@@ -203,7 +203,7 @@ struct RunOptions {
   /// Refine and verify independent hypotheses (a batch of starting poses, the half turns) on
   /// several threads, taken in order afterwards: the result is the same either way.
   bool parallel_hypotheses = true;
-  /// A frame's clusters are searched side by side, each whole on one thread, largest first (with
+  /// A frame's clusters are searched side by side, largest first (with
   /// parallel_hypotheses, two or more clusters, and no on_verified: that is heard in order). One
   /// parallel stage a frame instead of a few a cluster: on a machine busy with other programs, a
   /// short stage's threads wait for whichever of them the system has put aside, and two threads
@@ -211,9 +211,11 @@ struct RunOptions {
   /// (Stage times are then summed over the threads; the frame's total is its wall time.) Each
   /// cluster is a task, and so are the parts of its parallel stages (the screen, refinement and
   /// verification, coarse fit, CRH rolls, point pair votes): a thread with no cluster left takes
-  /// up the stages of one still running. A frame's largest cluster was often most of its work, on
-  /// one thread while the other waited; measured on the real YCB-Video frames, 0.096 -> 0.084 s
-  /// median idle, 0.19 -> 0.16 s with two busy processes beside it (docs/BENCHMARK.md).
+  /// up the stages of one still running (describing a cluster, matching it against a large
+  /// database and the votes of one object stay on its thread). A frame's largest cluster was often
+  /// most of its work, on one thread while the other waited; measured on the real YCB-Video
+  /// frames, 0.096 -> 0.084 s median idle, 0.19 -> 0.16 s with two busy processes beside it
+  /// (docs/BENCHMARK.md).
   bool parallel_clusters = true;
   /// Starting poses are refined and verified this many at a time (the first that passes in a batch
   /// is taken, as one after the other would). A fixed number, not the thread count, so that results
