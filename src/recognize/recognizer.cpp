@@ -41,8 +41,10 @@ void for_each_index(std::ptrdiff_t n, bool parallel, std::ptrdiff_t grain, const
     return;
   }
   if (omp_in_parallel()) {
-#pragma omp taskloop grainsize(grain) shared(body)
-    for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
+    // (Unsigned: clang compares the loop's bound with its own unsigned count of iterations.)
+    const auto count = static_cast<std::size_t>(n), chunk = static_cast<std::size_t>(grain);
+#pragma omp taskloop grainsize(chunk) shared(body)
+    for (std::size_t i = 0; i < count; ++i) body(static_cast<std::ptrdiff_t>(i));
   } else {
 #pragma omp parallel for schedule(dynamic, grain)
     for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
