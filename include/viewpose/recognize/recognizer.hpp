@@ -58,7 +58,8 @@ inline std::string_view pose_source_name(PoseSource source) { return kPoseSource
 struct MatchOptions {
   /// `touching` by default: on the real YCB-V frames it finds 27 of 28 poses where `vfh` finds 25,
   /// at 0.10 s a frame median against 0.07 (docs/BENCHMARK.md, "Point pair votes"); votes cost
-  /// about 15 ms per object and region, and are cast only where a detection leaves part of its region.
+  /// about 7 ms per object and region of a real frame, and are cast only where a detection leaves
+  /// part of its region.
   PoseSource source = PoseSource::touching;
   /// The pair tables and votes (every source but vfh). Each object's table is the database's where
   /// it stores one made with these options (DatabaseParams::ppf), else made when the recognizer is
