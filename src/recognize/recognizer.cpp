@@ -536,6 +536,8 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
   const auto first = region.candidates.begin() + static_cast<std::ptrdiff_t>(from);
   for (auto c = first; c != first + static_cast<std::ptrdiff_t>(n); ++c) prepared(c->object);  // (each object once)
   const auto count = static_cast<std::ptrdiff_t>(n);
+  const std::size_t base = region.screened_poses.size();
+  region.screened_poses.resize(base + n);
   for_each_index(count, options_.run.parallel_hypotheses, 4, [&](std::ptrdiff_t k) {
     Candidate& c = first[k];
     const IcpTarget& target = icp_target(c.object);
@@ -543,7 +545,8 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
     target.grid(options_.icp.grid_cell_m, options_.icp.reach_m());
     const IcpResult r = icp_point_to_plane(region.icp_source, target, c.T_camera_object.inverse(), screen_icp_);
     c.screen_fitness = icp_fitness(region.icp_source, target, r.T_target_source, screen_reach_m_, screen_icp_);
-    c.T_screened = r.T_target_source.inverse();
+    c.screened_pose = static_cast<std::uint32_t>(base + static_cast<std::size_t>(k));
+    region.screened_poses[c.screened_pose] = r.T_target_source.inverse();
   });
   // Best screened first; equals keep their coarse-fit order. The unscreened rest keep theirs after.
   std::stable_sort(first, first + count, [](const Candidate& a, const Candidate& b) { return a.screen_fitness > b.screen_fitness; });
@@ -554,13 +557,13 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
   out.times.icp_ms += ms_since(t);
 }
 
-bool Recognizer::seen_through_after_screen(const Region& region, const Candidate& c, const Frame& frame) const {
-  // The cheapest test of verification, where the screen led the pose: measured on every set of
-  // make results and the real negatives, no pose that went on to pass verification's bounds was
-  // seen through at more than 0.36 of its points there (the test refuses above 0.5), while about
-  // half of those refined in full were (real YCB-Video 54 %, rooms 46 %).
+bool Recognizer::refused_after_screen(const Region& region, const Candidate& c, const Frame& frame, Recognition& out) const {
+  // (The measurement that makes this safe: MatchOptions::prescreen.)
   if (c.screen_fitness < 0) return false;
-  return seen_through_quickly(verify_model(c.object), c.T_screened, frame.depth, frame.K, region.verify).has_value();
+  const Transform& T_camera_object = region.screened_poses[c.screened_pose];
+  if (!seen_through_quickly(verify_model(c.object), T_camera_object, frame.depth, frame.K, region.verify)) return false;
+  ++out.screened_out;
+  return true;
 }
 
 std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& region, Recognition& out) const {
@@ -716,11 +719,7 @@ void Recognizer::challenge(const Region& region, std::size_t next, std::size_t e
   for (std::size_t i = next; i < end; ++i) {
     const std::uint32_t object = region.candidates[i].object;
     if (object == best.object_index || tried[object]++ >= options_.match.challenger_views) continue;
-    if (seen_through_after_screen(region, region.candidates[i], frame)) {
-      ++out.screened_out;
-      continue;
-    }
-    which.push_back(i);
+    if (!refused_after_screen(region, region.candidates[i], frame, out)) which.push_back(i);
   }
   const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
   for (std::size_t i = 0; i < which.size() && !out_of_time(out); i += batch) {
@@ -788,6 +787,7 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
       const auto t = Clock::now();
       for (Region& region : regions) {
         region.candidates = pair_vote_candidates(region, OccupancyGrid(region.icp_source, options_.match.fit_cell_m));
+        region.screened_poses.clear();
         std::stable_sort(region.candidates.begin(), region.candidates.end(), [](const Candidate& x, const Candidate& y) { return x.fit > y.fit; });
         interleave_by_object(region.candidates.begin(), region.candidates.end());
         region.screen_done = false;
@@ -815,8 +815,7 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
       // spends its share of the budget unrefined (the next batch is chosen across the regions
       // again, as if it had been refined).
       for (std::size_t taken = 0; next[r] < end[r] && taken < batch && spent < budget; ++next[r], ++spent, ++taken) {
-        if (!seen_through_after_screen(regions[r], regions[r].candidates[next[r]], frame)) which.push_back(next[r]);
-        else ++out.screened_out;
+        if (!refused_after_screen(regions[r], regions[r].candidates[next[r]], frame, out)) which.push_back(next[r]);
       }
       if (which.empty()) continue;
       std::optional<Detection> det = try_candidates(regions[r], which, options_.accept.keep_best, frame, out);

@@ -343,7 +343,9 @@ class Recognizer {
     Transform T_camera_object = Transform::Identity();
     double fit = 0;  // coarse_fit
     double screen_fitness = -1;  // the short ICP's share of the region brought onto the model (-1: not screened)
-    Transform T_screened = Transform::Identity();  // where the short ICP led it (when screened)
+    // Where the short ICP led it: into Region::screened_poses (when screened). An index, not a
+    // pose: a region has thousands of candidates, sorted and interleaved, and 48 of them screened.
+    std::uint32_t screened_pose = 0;
     // Screened poses rank above every unscreened one (a share and a coarse fit are not comparable).
     double priority() const { return screen_fitness >= 0 ? 1.0 + screen_fitness : fit; }
   };
@@ -360,6 +362,7 @@ class Recognizer {
     VerifyOptions near_miss;  // verify with the looser conflict bound of a pose the wrong way round
     bool try_near_misses = false;
     bool screen_done = false;  // prescreen has ordered its candidates
+    std::vector<Transform> screened_poses;  // where the short ICP led each screened candidate
     VerifyOptions partial;  // verify with min_cluster_explained lowered (SplitOptions::joint_min_cluster_explained)
     // The best pose so far that passed `partial` but not `verify` (with a confidence computed as if
     // it had), for search's `partial`.
@@ -395,9 +398,10 @@ class Recognizer {
   // short ICP and put in the order of where it brought them (Candidate::priority), best first.
   void prescreen(Region& region, std::size_t from, Recognition& out) const;
   // Whether verification's quick test refuses a screened pose where the short ICP led it (the
-  // camera sees past the model there): such a pose keeps its place in the order and its share of
-  // the budget, but is not refined in full. Tested only when its turn comes.
-  bool seen_through_after_screen(const Region& region, const Candidate& c, const Frame& frame) const;
+  // camera sees past the model there; MatchOptions::prescreen says why that is safe), counted in
+  // `out.screened_out`: such a pose keeps its place in the order and its share of the budget, but
+  // is not refined in full. Tested only when its turn comes.
+  bool refused_after_screen(const Region& region, const Candidate& c, const Frame& frame, Recognition& out) const;
   // The starting poses `which` (indices into region.candidates), refined and verified together: the
   // first accepted in order (with take_best, the best). A batch in which nothing passes but one pose
   // fails only by its free-space conflicts has that pose's half turns tried at once.
