@@ -20,6 +20,11 @@ namespace viewpose {
 namespace fs = std::filesystem;
 
 std::vector<std::uint8_t> read_file_prefix(const fs::path& path, std::size_t count, std::size_t max_bytes, std::uint64_t& file_size) {
+  return read_file_range(path, 0, count, max_bytes, file_size);
+}
+
+std::vector<std::uint8_t> read_file_range(const fs::path& path, std::uint64_t offset, std::size_t count, std::size_t max_bytes,
+                                          std::uint64_t& file_size) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
   if (ec || !fs::exists(status)) throw Error(fmt::format("{}: no such file", path.string()));
@@ -32,10 +37,14 @@ std::vector<std::uint8_t> read_file_prefix(const fs::path& path, std::size_t cou
   file_size = size;
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(std::min<std::uintmax_t>(size, count)));
+  const std::uintmax_t start = std::min<std::uintmax_t>(size, offset);
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(std::min<std::uintmax_t>(size - start, count)));
+  if (start > 0 && !in.seekg(static_cast<std::streamoff>(start))) {
+    throw Error(fmt::format("{}: cannot seek to byte {}: {}", path.string(), start, std::strerror(errno)));
+  }
   in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   if (static_cast<std::size_t>(in.gcount()) != bytes.size()) {
-    throw Error(fmt::format("{}: read {} of {} bytes (file changed while reading?)", path.string(), in.gcount(), size));
+    throw Error(fmt::format("{}: read {} of {} bytes (file changed while reading?)", path.string(), in.gcount(), bytes.size()));
   }
   return bytes;
 }

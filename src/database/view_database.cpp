@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -405,7 +406,44 @@ ViewDatabase ViewDatabase::load(const std::filesystem::path& path, DatabaseLoadO
     // A file replaced between the two reads (a `db build` renaming over it) is not mixed with the first.
     if (file_size != first_size || payload_size(bytes, header) != size) header.fail("the file changed while it was read");
   }
-  return read_payload(file_parts(bytes, file_size, header).payload, name);
+  const FileParts parts = file_parts(bytes, file_size, header);
+  ViewDatabase db = read_payload(parts.payload, name);
+  if (parts.tables_size > 0) {
+    PairTablesOnDisk& on_disk = db.pair_tables_on_disk.emplace();
+    on_disk.path = path;
+    on_disk.file_size = file_size;
+    std::copy_n(bytes.begin(), kHeaderBytes, on_disk.header.begin());
+    on_disk.offset = kHeaderBytes + parts.payload.size();
+  }
+  return db;
+}
+
+std::vector<std::shared_ptr<const PpfTable>> read_stored_pair_tables(const ViewDatabase& db) {
+  if (!db.pair_tables_on_disk) return {};
+  const PairTablesOnDisk& on_disk = *db.pair_tables_on_disk;
+  const std::string name = on_disk.path.string();
+  const Reader header({}, name);
+  std::uint64_t file_size = 0;
+  const std::vector<std::uint8_t> first = read_file_prefix(on_disk.path, kHeaderBytes, ViewDatabase::kMaxFileBytes, file_size);
+  if (file_size != on_disk.file_size || first.size() != kHeaderBytes || !std::equal(first.begin(), first.end(), on_disk.header.begin())) {
+    header.fail("the file changed since it was loaded; load it again");
+  }
+  std::vector<std::uint8_t> tail = read_file_range(on_disk.path, on_disk.offset, std::numeric_limits<std::size_t>::max(),
+                                                   ViewDatabase::kMaxFileBytes, file_size);
+  if (file_size != on_disk.file_size || tail.size() < kTablesHeaderBytes) header.fail("the file changed since it was loaded; load it again");
+  std::uint64_t tables_size = 0;
+  std::uint32_t crc = 0;
+  std::memcpy(&tables_size, tail.data(), 8);
+  std::memcpy(&crc, tail.data() + 8, 4);
+  if (tables_size != tail.size() - kTablesHeaderBytes) header.fail("the file changed since it was loaded; load it again");
+  // Read into a copy of the objects, as load() with the tables would have set them.
+  ViewDatabase copy;
+  copy.objects.resize(db.objects.size());
+  for (std::size_t i = 0; i < db.objects.size(); ++i) copy.objects[i].diameter_m = db.objects[i].diameter_m;
+  read_pair_tables(copy, std::span<const std::uint8_t>(tail).subspan(kTablesHeaderBytes), crc, name);
+  std::vector<std::shared_ptr<const PpfTable>> tables;
+  for (DatabaseObject& o : copy.objects) tables.push_back(std::move(o.pair_table));
+  return tables;
 }
 
 namespace {

@@ -157,8 +157,21 @@ const PpfModel* Recognizer::pair_table(std::uint32_t object) const {
     // then gives no votes, once, rather than an error in every region.)
     // The database's table where it was made as these options would make it.
     try {
-      if (o.pair_table && o.pair_table->made_with(options_.match.ppf)) {
-        p.ppf = std::make_unique<PpfModel>(o.pair_table, options_.match.ppf);
+      std::shared_ptr<const PpfTable> stored = o.pair_table;
+      if (!stored && db_.pair_tables_on_disk) {
+        std::call_once(tables_on_disk_once_, [&] {
+          // A file gone or rebuilt since it was loaded gives none: each table is then made from
+          // its model below, as for a database that stores none (the same table, made slower).
+          try {
+            tables_on_disk_ = read_stored_pair_tables(db_);
+          } catch (const Error&) {
+            tables_on_disk_.clear();
+          }
+        });
+        if (object < tables_on_disk_.size()) stored = tables_on_disk_[object];
+      }
+      if (stored && stored->made_with(options_.match.ppf)) {
+        p.ppf = std::make_unique<PpfModel>(stored, options_.match.ppf);
       } else {
         p.ppf = std::make_unique<PpfModel>(o.model_points, o.model_normals, o.diameter_m, options_.match.ppf);
       }

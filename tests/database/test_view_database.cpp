@@ -169,6 +169,44 @@ TEST(ViewDatabaseTest, GridsAreStoredWithinTheirByteLimitAndDamagedOnesAreRefuse
   expect_error([&] { ViewDatabase::deserialize(bad.serialize(), "grid.vpdb"); }, "does not fit its model points");
 }
 
+TEST(ViewDatabaseTest, PairTablesLeftOnDiskAreReadLaterAndOnlyFromTheFileLoaded) {
+  const ViewDatabase& db = small_db();
+  test::TempDir dir;
+  db.save(dir / "tables.vpdb");
+  const ViewDatabase without = ViewDatabase::load(dir / "tables.vpdb", {.pair_tables = false});
+  ASSERT_TRUE(without.pair_tables_on_disk);
+  EXPECT_FALSE(without.objects[0].pair_table || without.objects[1].pair_table);
+  // Read later, they are the tables a whole load gives, object by object.
+  const std::vector<std::shared_ptr<const PpfTable>> later = read_stored_pair_tables(without);
+  ASSERT_EQ(later.size(), db.objects.size());
+  for (std::size_t o = 0; o < later.size(); ++o) {
+    ASSERT_TRUE(later[o]);
+    EXPECT_EQ(later[o]->entries, db.objects[o].pair_table->entries);
+    EXPECT_EQ(later[o]->key_start, db.objects[o].pair_table->key_start);
+    EXPECT_EQ(later[o]->sampled.points, db.objects[o].pair_table->sampled.points);
+  }
+  // A whole load, or a file without tables, leaves nothing on disk to read.
+  EXPECT_FALSE(ViewDatabase::load(dir / "tables.vpdb").pair_tables_on_disk);
+  ViewDatabase bare = db;
+  for (DatabaseObject& o : bare.objects) o.pair_table.reset();
+  bare.save(dir / "bare.vpdb");
+  EXPECT_FALSE(ViewDatabase::load(dir / "bare.vpdb", {.pair_tables = false}).pair_tables_on_disk);
+  EXPECT_TRUE(read_stored_pair_tables(ViewDatabase::load(dir / "bare.vpdb", {.pair_tables = false})).empty());
+  // Another database written over the file (a rebuild), the file damaged or gone: refused.
+  ViewDatabase other = db;
+  other.objects.pop_back();
+  other.save(dir / "tables.vpdb");
+  expect_error([&] { read_stored_pair_tables(without); }, "tables.vpdb: the file changed since it was loaded");
+  db.save(dir / "tables.vpdb");
+  EXPECT_EQ(read_stored_pair_tables(without).size(), db.objects.size());  // the same bytes again: the same file
+  std::vector<std::uint8_t> file = db.serialize();
+  file[file.size() - 100] ^= 0x10;
+  write_file_atomic(dir / "tables.vpdb", file);
+  expect_error([&] { read_stored_pair_tables(without); }, "checksum mismatch in the pair tables");
+  std::filesystem::remove(dir / "tables.vpdb");
+  expect_error([&] { read_stored_pair_tables(without); }, "no such file");
+}
+
 TEST(ViewDatabaseTest, PairTablesAreStoredWithinTheirByteLimitAndReadBackWhole) {
   const ViewDatabase& db = small_db();
   ASSERT_TRUE(db.objects[0].pair_table && db.objects[1].pair_table);

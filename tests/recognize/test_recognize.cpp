@@ -558,6 +558,40 @@ TEST(Recognize, PointPairVotesAloneOrBesideTheViewsFindBothObjects) {
   test::expect_error([] { pose_source_from_name("PPF"); }, "source: \"PPF\" is none of vfh, ppf, both, touching");
 }
 
+TEST(Recognize, PairTablesLeftOnDiskAreReadForTheFirstVoteOrMadeWhereTheFileIsGone) {
+  // A database loaded without its pair tables (as `recognize` of one file loads it): the votes
+  // read them from the file; with the file gone since, they are made from the models. Either way
+  // the same tables, so the same poses as with the tables loaded whole.
+  const ViewDatabase& db = jug_and_can_db();
+  const JugAndCan scene = jug_and_can_scene();
+  const SimulatedFrame f = simulate_image(scene.ds, SimImage{{{0, scene.jug_pose}, {1, scene.can_at(0.25)}}}, SensorModel::kinect_v1(), 9);
+  const Frame frame = frame_from_depth(f.depth, K);
+  RecognizerOptions votes;
+  votes.match.source = PoseSource::ppf;
+  const Recognition whole = Recognizer(db, votes).recognize(frame);
+  expect_jug_and_can_found(whole, f);
+  const test::TempDir dir;
+  db.save(dir / "db.vpdb");
+  // Left on disk only for one frame with votes only after a detection; read whole otherwise.
+  const RecognizerOptions touching;
+  EXPECT_FALSE(database_load_options(touching, true).pair_tables);
+  EXPECT_TRUE(database_load_options(touching, false).pair_tables);
+  EXPECT_TRUE(database_load_options(votes, true).pair_tables);
+  const ViewDatabase lazy = ViewDatabase::load(dir / "db.vpdb", {.pair_tables = false});
+  ASSERT_TRUE(lazy.pair_tables_on_disk);
+  ASSERT_FALSE(lazy.objects[0].pair_table);
+  const auto same_poses = [&](const Recognition& r, const char* how) {
+    ASSERT_EQ(r.detections.size(), whole.detections.size()) << how;
+    for (std::size_t i = 0; i < r.detections.size(); ++i) {
+      EXPECT_EQ(r.detections[i].object_id, whole.detections[i].object_id) << how;
+      EXPECT_TRUE(r.detections[i].T_camera_object.isApprox(whole.detections[i].T_camera_object, 1e-12)) << how;
+    }
+  };
+  same_poses(Recognizer(lazy, votes).recognize(frame), "read from the file");
+  std::filesystem::remove(dir / "db.vpdb");
+  same_poses(Recognizer(lazy, votes).recognize(frame), "made from the models");
+}
+
 TEST(Recognize, ObjectsTooSmallForAClusterAreSkippedWithTheSameResult) {
   // A large box (no object of the database) beside the jug, and a database of the jug and a can:
   // the can is too small to explain the box's cluster, so its views are not tried there. Skipping

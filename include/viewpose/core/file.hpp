@@ -26,6 +26,12 @@ std::vector<std::uint8_t> read_file_bytes(const std::filesystem::path& path,
 std::vector<std::uint8_t> read_file_prefix(const std::filesystem::path& path, std::size_t count, std::size_t max_bytes,
                                            std::uint64_t& file_size);
 
+/// The `count` bytes of `path` from byte `offset` on (fewer where the file is shorter; none past its
+/// end), and in `file_size` its whole size. The same errors as read_file_bytes (`max_bytes` bounds
+/// the whole file).
+std::vector<std::uint8_t> read_file_range(const std::filesystem::path& path, std::uint64_t offset, std::size_t count,
+                                          std::size_t max_bytes, std::uint64_t& file_size);
+
 /// Writes `bytes` to `path` atomically. Throws viewpose::Error on failure, leaving any previous
 /// file at `path` untouched and no temporary file behind.
 void write_file_atomic(const std::filesystem::path& path, std::span<const std::uint8_t> bytes);

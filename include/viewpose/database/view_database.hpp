@@ -2,9 +2,12 @@
 // The view database: every object rendered from a view sphere, each view described exactly as a
 // scene cluster is, stored with its pose so that a match gives a pose. One binary file, versioned
 // and checksummed, written atomically.
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -84,6 +87,17 @@ struct DatabaseLoadOptions {
   bool pair_tables = true;
 };
 
+/// Where the pair tables of a database loaded without them lie (DatabaseLoadOptions::pair_tables
+/// false): its file, the file's size and header then, and the tables' offset in it. A recognizer
+/// that first casts votes then reads them (read_stored_pair_tables): most real frames cast none,
+/// and reading the tables of eight objects was a quarter of a `recognize` process.
+struct PairTablesOnDisk {
+  std::filesystem::path path;
+  std::uint64_t file_size = 0;
+  std::array<std::uint8_t, 32> header{};  // the file's header when it was loaded (the payload's size and CRC-32)
+  std::uint64_t offset = 0;               // of the tables' 16-byte header
+};
+
 struct ViewDatabase {
   // 2: objects carry their symmetries. 3: objects carry a drawing mesh and a filled ICP grid; views
   // keep only their ICP points. 4: objects carry their point pair table.
@@ -91,6 +105,8 @@ struct ViewDatabase {
   DatabaseParams params;
   std::vector<DatabaseObject> objects;
   std::vector<ViewEntry> views;
+  /// Set by load() without the pair tables, where the file holds some: where to read them later.
+  std::optional<PairTablesOnDisk> pair_tables_on_disk;
 
   void save(const std::filesystem::path& path) const;  ///< atomic
   static ViewDatabase load(const std::filesystem::path& path, DatabaseLoadOptions options = {});
@@ -129,6 +145,12 @@ ViewEntry describe_view(const DepthImage& depth, const Transform& T_view_object,
 
 /// The bytes of the nearest-point grids `db` stores (DatabaseObject::nearest_cells).
 std::size_t stored_grid_bytes(const ViewDatabase& db);
+
+/// The pair tables of a database loaded without them (ViewDatabase::pair_tables_on_disk), one per
+/// object in order (null where the file stores none); empty when there is no such file part. Throws
+/// Error (one line) when the file is gone, damaged, or no longer the one loaded (its header or size
+/// changed: a `db build` over it).
+std::vector<std::shared_ptr<const PpfTable>> read_stored_pair_tables(const ViewDatabase& db);
 
 /// The bytes of the pair tables `db` stores (DatabaseObject::pair_table).
 std::size_t stored_pair_table_bytes(const ViewDatabase& db);
