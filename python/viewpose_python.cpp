@@ -110,7 +110,8 @@ PYBIND11_MODULE(viewpose, m) {
           },
           py::arg("path"), py::kw_only(), py::arg("pair_tables") = true,
           "Reads a database `viewpose db build` (or save) wrote; pair_tables=False leaves its point pair tables "
-          "unread, as `viewpose recognize --source vfh` does (a recognizer that votes makes any it needs)")
+          "unread, as `viewpose recognize` of one file does (a recognizer that votes reads them from the file when it "
+          "first needs them, or makes them where the file has changed since)")
       .def("save", &ViewDatabase::save, py::arg("path"), "Writes the database (atomically)")
       .def_readonly("objects", &ViewDatabase::objects)
       .def_property_readonly("view_count", [](const ViewDatabase& db) { return db.views.size(); })

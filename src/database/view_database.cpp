@@ -410,7 +410,10 @@ ViewDatabase ViewDatabase::load(const std::filesystem::path& path, DatabaseLoadO
   ViewDatabase db = read_payload(parts.payload, name);
   if (parts.tables_size > 0) {
     PairTablesOnDisk& on_disk = db.pair_tables_on_disk.emplace();
-    on_disk.path = path;
+    // Read later, when the working directory may have changed.
+    std::error_code ec;
+    on_disk.path = std::filesystem::absolute(path, ec);
+    if (ec) on_disk.path = path;
     on_disk.file_size = file_size;
     std::copy_n(bytes.begin(), kHeaderBytes, on_disk.header.begin());
     on_disk.offset = kHeaderBytes + parts.payload.size();

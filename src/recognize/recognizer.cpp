@@ -160,15 +160,17 @@ const PpfModel* Recognizer::pair_table(std::uint32_t object) const {
       std::shared_ptr<const PpfTable> stored = o.pair_table;
       if (!stored && db_.pair_tables_on_disk) {
         std::call_once(tables_on_disk_once_, [&] {
-          // A file gone or rebuilt since it was loaded gives none: each table is then made from
-          // its model below, as for a database that stores none (the same table, made slower).
+          // A file gone or rebuilt since it was loaded (or too large to read now) gives none: each
+          // table is then made from its model below, as for a database that stores none (the same
+          // table, made slower). Nothing may escape: this can run inside a cluster's task.
           try {
             tables_on_disk_ = read_stored_pair_tables(db_);
-          } catch (const Error&) {
+          } catch (const std::exception&) {
             tables_on_disk_.clear();
           }
         });
-        if (object < tables_on_disk_.size()) stored = tables_on_disk_[object];
+        // (Each object's entry is read once, under its own flag: handed over, not kept twice.)
+        if (object < tables_on_disk_.size()) stored = std::move(tables_on_disk_[object]);
       }
       if (stored && stored->made_with(options_.match.ppf)) {
         p.ppf = std::make_unique<PpfModel>(stored, options_.match.ppf);

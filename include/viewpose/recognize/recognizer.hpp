@@ -62,7 +62,8 @@ struct MatchOptions {
   /// part of its region.
   PoseSource source = PoseSource::touching;
   /// The pair tables and votes (every source but vfh). Each object's table is the database's where
-  /// it stores one made with these options (DatabaseParams::ppf), else made when the recognizer is
+  /// it stores one made with these options (DatabaseParams::ppf; loaded, or read from its file when
+  /// first needed where the database was loaded without them), else made when the recognizer is
   /// (ppf, both: databases of up to RunOptions::prepare_objects_up_to objects) or on first use.
   PpfOptions ppf{};
   std::size_t per_object = 20;  ///< nearest views per region and object (thesis: 20, one object)
@@ -485,8 +486,10 @@ class Recognizer {
   VerifyModel verify_model(std::uint32_t object) const;
 
   std::vector<std::unique_ptr<PreparedObject>> prepared_;  // one per object
-  // The pair tables of a database loaded without them (ViewDatabase::pair_tables_on_disk), read on
-  // the first object's first vote; empty where unreadable (the tables are then made from the model).
+  // The pair tables of a database loaded without them (ViewDatabase::pair_tables_on_disk), read
+  // when the first object's table is first asked for (its first vote; with ppf or both, when the
+  // recognizer is made); each handed to its object's PpfModel; empty where unreadable (the tables
+  // are then made from the models).
   mutable std::once_flag tables_on_disk_once_;
   mutable std::vector<std::shared_ptr<const PpfTable>> tables_on_disk_;
   ViewIndex index_;
