@@ -326,12 +326,25 @@ std::vector<std::uint8_t> ViewDatabase::file_from_payload(std::span<const std::u
 
 namespace {
 
+// The pair tables' own 16-byte header, at the start of `at` (which holds at least that): their
+// size and CRC-32.
+struct TablesHeader {
+  std::uint64_t size = 0;
+  std::uint32_t crc = 0;
+};
+
+TablesHeader tables_header(std::span<const std::uint8_t> at) {
+  TablesHeader h;
+  std::memcpy(&h.size, at.data(), 8);
+  std::memcpy(&h.crc, at.data() + 8, 4);
+  return h;
+}
+
 // Where a file's parts lie, from its first kHeaderBytes + payload + kTablesHeaderBytes bytes (all
 // of `bytes` may be longer) and its whole size; the payload's checksum checked.
 struct FileParts {
   std::span<const std::uint8_t> payload;
-  std::uint64_t tables_size = 0;
-  std::uint32_t tables_crc = 0;
+  TablesHeader tables;
 };
 
 // The header's payload size, or throws; `bytes` holds at least the header.
@@ -360,24 +373,24 @@ FileParts file_parts(std::span<const std::uint8_t> bytes, std::uint64_t file_siz
   }
   // (Less than that read: the file was replaced between two reads of it.)
   if (bytes.size() < kHeaderBytes + size + kTablesHeaderBytes) header.fail("the file changed while it was read");
-  std::uint64_t tables_size = 0;
-  std::memcpy(&tables_size, bytes.data() + kHeaderBytes + size, 8);
-  if (tables_size != after_header - size - kTablesHeaderBytes) {
-    header.fail(fmt::format("the pair tables' header says {} bytes but the file holds {} after the views (truncated or padded)",
-                            tables_size, after_header - size - kTablesHeaderBytes));
-  }
   FileParts parts;
+  parts.tables = tables_header(bytes.subspan(static_cast<std::size_t>(kHeaderBytes + size)));
+  if (parts.tables.size != after_header - size - kTablesHeaderBytes) {
+    header.fail(fmt::format("the pair tables' header says {} bytes but the file holds {} after the views (truncated or padded)",
+                            parts.tables.size, after_header - size - kTablesHeaderBytes));
+  }
   std::uint32_t crc;
   std::memcpy(&crc, bytes.data() + 24, 4);
   parts.payload = bytes.subspan(kHeaderBytes, static_cast<std::size_t>(size));
   if (payload_crc(parts.payload) != crc) header.fail("checksum mismatch: the file is corrupted");
-  parts.tables_size = tables_size;
-  std::memcpy(&parts.tables_crc, bytes.data() + kHeaderBytes + size + 8, 4);
   return parts;
 }
 
 ViewDatabase read_payload(std::span<const std::uint8_t> payload, std::string_view name);
-void read_pair_tables(ViewDatabase& db, std::span<const std::uint8_t> tables, std::uint32_t crc, std::string_view name);
+// The pair tables (`tables` after their header), one per object of `objects` in order (null where
+// none is stored; all null when the file stores none); each checked to be made for its object's size.
+std::vector<std::shared_ptr<const PpfTable>> read_pair_tables(std::span<const std::uint8_t> tables, std::uint32_t crc,
+                                                              std::span<const DatabaseObject> objects, std::string_view name);
 
 }  // namespace
 
@@ -386,7 +399,9 @@ ViewDatabase ViewDatabase::deserialize(std::span<const std::uint8_t> bytes, std:
   const FileParts parts = file_parts(bytes, bytes.size(), header);
   ViewDatabase db = read_payload(parts.payload, name);
   if (options.pair_tables) {
-    read_pair_tables(db, bytes.subspan(bytes.size() - static_cast<std::size_t>(parts.tables_size)), parts.tables_crc, name);
+    std::vector<std::shared_ptr<const PpfTable>> tables =
+        read_pair_tables(bytes.subspan(bytes.size() - static_cast<std::size_t>(parts.tables.size)), parts.tables.crc, db.objects, name);
+    for (std::size_t i = 0; i < db.objects.size(); ++i) db.objects[i].pair_table = std::move(tables[i]);
   }
   return db;
 }
@@ -408,7 +423,7 @@ ViewDatabase ViewDatabase::load(const std::filesystem::path& path, DatabaseLoadO
   }
   const FileParts parts = file_parts(bytes, file_size, header);
   ViewDatabase db = read_payload(parts.payload, name);
-  if (parts.tables_size > 0) {
+  if (parts.tables.size > 0) {
     PairTablesOnDisk& on_disk = db.pair_tables_on_disk.emplace();
     // Read later, when the working directory may have changed.
     std::error_code ec;
@@ -434,19 +449,9 @@ std::vector<std::shared_ptr<const PpfTable>> read_stored_pair_tables(const ViewD
   std::vector<std::uint8_t> tail = read_file_range(on_disk.path, on_disk.offset, std::numeric_limits<std::size_t>::max(),
                                                    ViewDatabase::kMaxFileBytes, file_size);
   if (file_size != on_disk.file_size || tail.size() < kTablesHeaderBytes) header.fail("the file changed since it was loaded; load it again");
-  std::uint64_t tables_size = 0;
-  std::uint32_t crc = 0;
-  std::memcpy(&tables_size, tail.data(), 8);
-  std::memcpy(&crc, tail.data() + 8, 4);
-  if (tables_size != tail.size() - kTablesHeaderBytes) header.fail("the file changed since it was loaded; load it again");
-  // Read into a copy of the objects, as load() with the tables would have set them.
-  ViewDatabase copy;
-  copy.objects.resize(db.objects.size());
-  for (std::size_t i = 0; i < db.objects.size(); ++i) copy.objects[i].diameter_m = db.objects[i].diameter_m;
-  read_pair_tables(copy, std::span<const std::uint8_t>(tail).subspan(kTablesHeaderBytes), crc, name);
-  std::vector<std::shared_ptr<const PpfTable>> tables;
-  for (DatabaseObject& o : copy.objects) tables.push_back(std::move(o.pair_table));
-  return tables;
+  const TablesHeader tables = tables_header(tail);
+  if (tables.size != tail.size() - kTablesHeaderBytes) header.fail("the file changed since it was loaded; load it again");
+  return read_pair_tables(std::span<const std::uint8_t>(tail).subspan(kTablesHeaderBytes), tables.crc, db.objects, name);
 }
 
 namespace {
@@ -525,16 +530,19 @@ ViewDatabase read_payload(std::span<const std::uint8_t> payload, std::string_vie
   return db;
 }
 
-void read_pair_tables(ViewDatabase& db, std::span<const std::uint8_t> tables, std::uint32_t crc, std::string_view name) {
+std::vector<std::shared_ptr<const PpfTable>> read_pair_tables(std::span<const std::uint8_t> tables, std::uint32_t crc,
+                                                              std::span<const DatabaseObject> objects, std::string_view name) {
   Reader r(tables, name);
   if (payload_crc(tables) != crc) r.fail("checksum mismatch in the pair tables: the file is corrupted");
-  if (tables.empty()) return;  // none stored
-  r.need_records(db.objects.size(), 1);
-  for (DatabaseObject& o : db.objects) {
-    o.pair_table = r.get_pair_table();
-    if (o.pair_table && o.pair_table->diameter_m != o.diameter_m) r.fail("an object's pair table was made for another size");
+  std::vector<std::shared_ptr<const PpfTable>> out(objects.size());
+  if (tables.empty()) return out;  // none stored
+  r.need_records(objects.size(), 1);
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    out[i] = r.get_pair_table();
+    if (out[i] && out[i]->diameter_m != objects[i].diameter_m) r.fail("an object's pair table was made for another size");
   }
   if (!r.at_end()) r.fail("unexpected data after the last pair table");
+  return out;
 }
 
 }  // namespace
