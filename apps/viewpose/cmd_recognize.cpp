@@ -90,7 +90,7 @@ struct RecognizeFlags {
                  "depend on the inputs alone, byte for byte, whatever the thread count");
   }
   // The pair tables are read only where votes will be cast (for one frame, only once they are).
-  DatabaseLoadOptions load_options(bool one_frame) const { return database_load_options(options(), one_frame); }
+  DatabaseLoadOptions load_options(FramesToServe frames) const { return database_load_options(options(), frames); }
   RecognizerOptions options() const {
     RecognizerOptions o;
     o.accept.keep_best = keep_best;
@@ -153,7 +153,7 @@ void add_recognize_command(CLI::App& app, int& exit_code) {
       set_thread_count(threads);
       return load_scene(o->scene, o->camera);
     });
-    const ViewDatabase db = ViewDatabase::load(o->flags.db, o->flags.load_options(true));
+    const ViewDatabase db = ViewDatabase::load(o->flags.db, o->flags.load_options(FramesToServe::one));
     const Frame frame = scene.get();
     // One frame: ICP grids the database does not store fill only where its hypotheses look,
     // instead of whole before it (about 0.1 s an object).
@@ -379,7 +379,7 @@ void add_bop_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--images", o->images, "Do at most this many images in this run (then --resume does more)")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 40));
   cmd->callback([o, &exit_code] {
-    const ViewDatabase db = ViewDatabase::load(o->flags.db, o->flags.load_options(false));
+    const ViewDatabase db = ViewDatabase::load(o->flags.db, o->flags.load_options(FramesToServe::many));
     BopDataset ds = open_bop_dataset(o->dataset, o->split, {o->models_dir});
     for (const auto& note : ds.notes) fmt::print(stderr, "viewpose: note: {}\n", note);
     // The BOP19 task: per image, the objects to find and how many of each.

@@ -574,7 +574,7 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
 
 bool Recognizer::refused_after_screen(const Region& region, const Candidate& c, const Frame& frame, Recognition& out) const {
   // (The measurement that makes this safe: MatchOptions::prescreen.)
-  if (c.screen_fitness < 0) return false;
+  if (!c.screened()) return false;
   const Transform& T_camera_object = region.screened_poses[c.screened_pose];
   if (!seen_through_quickly(verify_model(c.object), T_camera_object, frame.depth, frame.K, region.verify)) return false;
   ++out.screened_out;

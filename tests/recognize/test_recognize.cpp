@@ -574,9 +574,9 @@ TEST(Recognize, PairTablesLeftOnDiskAreReadForTheFirstVoteOrMadeWhereTheFileIsGo
   db.save(dir / "db.vpdb");
   // Left on disk only for one frame with votes only after a detection; read whole otherwise.
   const RecognizerOptions touching;
-  EXPECT_FALSE(database_load_options(touching, true).pair_tables);
-  EXPECT_TRUE(database_load_options(touching, false).pair_tables);
-  EXPECT_TRUE(database_load_options(votes, true).pair_tables);
+  EXPECT_FALSE(database_load_options(touching, FramesToServe::one).pair_tables);
+  EXPECT_TRUE(database_load_options(touching, FramesToServe::many).pair_tables);
+  EXPECT_TRUE(database_load_options(votes, FramesToServe::one).pair_tables);
   const ViewDatabase lazy = ViewDatabase::load(dir / "db.vpdb", {.pair_tables = false});
   ASSERT_TRUE(lazy.pair_tables_on_disk);
   ASSERT_FALSE(lazy.objects[0].pair_table);
@@ -813,7 +813,7 @@ TEST(RealData, ACanStandingOnABoxAndTheBoxAreFoundTogetherFromPointPairVotes) {
   // again as `recognize` of one file runs it, the pair tables left in the file until the first vote.
   const test::TempDir files;
   db.save(files / "ycbv4.vpdb");
-  const ViewDatabase tables_on_disk = ViewDatabase::load(files / "ycbv4.vpdb", database_load_options(RecognizerOptions{}, true));
+  const ViewDatabase tables_on_disk = ViewDatabase::load(files / "ycbv4.vpdb", database_load_options(RecognizerOptions{}, FramesToServe::one));
   ASSERT_TRUE(tables_on_disk.pair_tables_on_disk);
   for (const auto& [source, database] : {std::pair{PoseSource::both, &db}, std::pair{PoseSource::touching, &db},
                                          std::pair{PoseSource::touching, &tables_on_disk}}) {

@@ -257,15 +257,18 @@ struct RecognizerOptions {
   RunOptions run{};
 };
 
+/// How many frames a loaded database will serve: one (a process per file), or a run of them.
+enum class FramesToServe { one, many };
+
 /// What a recognizer with `options` needs read of a database: the pair tables only where its
-/// source casts votes. With `touching` and `one_frame` (a process per file), they are read from the
+/// source casts votes. With `touching` and one frame to serve, they are read from the
 /// file when the first vote is cast instead (ViewDatabase::pair_tables_on_disk): most frames cast
 /// none, and reading them was a quarter of a `recognize` process that did not (real mOSD frames,
 /// eight objects: 0.11 -> 0.08 s median). A run over many frames reads them at once, so that no
 /// frame's time holds their reading.
-inline DatabaseLoadOptions database_load_options(const RecognizerOptions& options, bool one_frame = false) {
+inline DatabaseLoadOptions database_load_options(const RecognizerOptions& options, FramesToServe frames = FramesToServe::many) {
   const PoseSource source = options.match.source;
-  return {.pair_tables = source != PoseSource::vfh && !(source == PoseSource::touching && one_frame)};
+  return {.pair_tables = source != PoseSource::vfh && !(source == PoseSource::touching && frames == FramesToServe::one)};
 }
 
 struct Detection {
@@ -349,11 +352,12 @@ class Recognizer {
     Transform T_camera_object = Transform::Identity();
     double fit = 0;  // coarse_fit
     double screen_fitness = -1;  // the short ICP's share of the region brought onto the model (-1: not screened)
-    // Where the short ICP led it: into Region::screened_poses (when screened). An index, not a
-    // pose: a region has thousands of candidates, sorted and interleaved, and 48 of them screened.
+    // Where the short ICP led it: into Region::screened_poses, read only when screened(). An index,
+    // not a pose: a region has thousands of candidates, sorted and interleaved, and 48 of them screened.
     std::uint32_t screened_pose = 0;
+    bool screened() const { return screen_fitness >= 0; }
     // Screened poses rank above every unscreened one (a share and a coarse fit are not comparable).
-    double priority() const { return screen_fitness >= 0 ? 1.0 + screen_fitness : fit; }
+    double priority() const { return screened() ? 1.0 + screen_fitness : fit; }
   };
   // What every pose tried for one region needs: its description, its nearest views and the starting
   // poses they give (best coarse fit first), its ICP copy, and the bounds its poses are verified with.
