@@ -18,4 +18,15 @@ std::string openmp_wait() {
   return said.empty() ? "libgomp's default (spin 300000)" : said;
 }
 
+void FirstException::keep(std::exception_ptr e) noexcept {
+  const std::lock_guard lock(mutex_);
+  if (!first_) first_ = std::move(e);
+  failed_.store(true, std::memory_order_relaxed);
+}
+
+void FirstException::rethrow() {
+  const std::lock_guard lock(mutex_);
+  if (first_) std::rethrow_exception(first_);
+}
+
 }  // namespace viewpose

@@ -130,30 +130,34 @@ std::vector<Match> ViewIndex::nearest(const Vfh& query, std::size_t per_object, 
   using Near = std::pair<float, std::uint32_t>;  // (distance, view): ordered as the ties need
   const int shares = n > 20000 ? std::max(1, thread_count()) : 1;
   std::vector<std::vector<Near>> heaps(static_cast<std::size_t>(shares));
+  FirstException failed;
 #pragma omp parallel for schedule(static, 1) num_threads(shares) if (shares > 1)
   for (int share = 0; share < shares; ++share) {
-    std::vector<Near>& heap = heaps[static_cast<std::size_t>(share)];
-    heap.reserve(keep + 1);
-    const std::size_t begin = n * static_cast<std::size_t>(share) / static_cast<std::size_t>(shares),
-                      end = n * static_cast<std::size_t>(share + 1) / static_cast<std::size_t>(shares);
-    for (std::size_t v = begin; v < end; ++v) {
-      const std::int8_t* c = coordinates_.data() + v * kDirections;
-      float sum = 0;
-      for (int d = 0; d < kDirections; ++d) {
-        const float diff = static_cast<float>(c[d]) - q_steps[d];
-        sum += weight[d] * diff * diff;
+    failed.run([&] {
+      std::vector<Near>& heap = heaps[static_cast<std::size_t>(share)];
+      heap.reserve(keep + 1);
+      const std::size_t begin = n * static_cast<std::size_t>(share) / static_cast<std::size_t>(shares),
+                        end = n * static_cast<std::size_t>(share + 1) / static_cast<std::size_t>(shares);
+      for (std::size_t v = begin; v < end; ++v) {
+        const std::int8_t* c = coordinates_.data() + v * kDirections;
+        float sum = 0;
+        for (int d = 0; d < kDirections; ++d) {
+          const float diff = static_cast<float>(c[d]) - q_steps[d];
+          sum += weight[d] * diff * diff;
+        }
+        const Near item{sum, static_cast<std::uint32_t>(v)};
+        if (heap.size() < keep) {
+          heap.push_back(item);
+          std::push_heap(heap.begin(), heap.end());
+        } else if (item < heap.front()) {
+          std::pop_heap(heap.begin(), heap.end());
+          heap.back() = item;
+          std::push_heap(heap.begin(), heap.end());
+        }
       }
-      const Near item{sum, static_cast<std::uint32_t>(v)};
-      if (heap.size() < keep) {
-        heap.push_back(item);
-        std::push_heap(heap.begin(), heap.end());
-      } else if (item < heap.front()) {
-        std::pop_heap(heap.begin(), heap.end());
-        heap.back() = item;
-        std::push_heap(heap.begin(), heap.end());
-      }
-    }
+    });
   }
+  failed.rethrow();
   std::vector<Near> merged;
   for (const auto& heap : heaps) merged.insert(merged.end(), heap.begin(), heap.end());
   std::sort(merged.begin(), merged.end());

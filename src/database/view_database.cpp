@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "viewpose/core/threads.hpp"
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/file.hpp"
 #include "viewpose/core/kdtree.hpp"
@@ -709,10 +710,14 @@ ViewDatabase build_view_database(std::span<const ObjectModel> objects, const Dat
     const std::vector<RenderedFrame> frames = render_views(mesh, poses, params.camera, render_options);
     std::vector<ViewEntry> entries(poses.size());
     std::vector<PointCloud> described(poses.size());
+    FirstException failed;
 #pragma omp parallel for schedule(dynamic)
     for (std::size_t i = 0; i < poses.size(); ++i) {
-      entries[i] = describe_view(frames[i].depth, poses[i], static_cast<std::uint32_t>(o), params, &described[i]);
+      failed.run([&] {
+        entries[i] = describe_view(frames[i].depth, poses[i], static_cast<std::uint32_t>(o), params, &described[i]);
+      });
     }
+    failed.rethrow();
     // The model cloud: every view's points carried into the object frame, on one voxel grid. It is
     // the surface a sensor can see, with outward normals, and ICP aligns scene points to it.
     PointCloud model;

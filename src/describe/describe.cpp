@@ -1,5 +1,6 @@
 #include "viewpose/describe/describe.hpp"
 
+#include "viewpose/core/threads.hpp"
 #include "viewpose/core/stopwatch.hpp"
 
 namespace viewpose {
@@ -23,21 +24,23 @@ Description describe(PointCloud points, const DescribeOptions& options, Describe
   if (times) times->normals_ms += ms_since(t);
   // VFH and CRH depend only on the points and normals: computed side by side.
   double vfh_ms = 0, crh_ms = 0;
+  FirstException failed;
 #pragma omp parallel sections num_threads(2)
   {
 #pragma omp section
-    {
+    failed.run([&] {
       const auto tv = Clock::now();
       d.vfh = compute_vfh(kept.points, kept.normals, options.vfh);
       vfh_ms = ms_since(tv);
-    }
+    });
 #pragma omp section
-    {
+    failed.run([&] {
       const auto tc = Clock::now();
       d.crh = compute_crh(kept.normals, d.centroid);
       crh_ms = ms_since(tc);
-    }
+    });
   }
+  failed.rethrow();
   if (times) {
     times->vfh_ms += vfh_ms;
     times->crh_ms += crh_ms;

@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
+#include "viewpose/core/threads.hpp"
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/cell_grid.hpp"
 
@@ -188,57 +189,61 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
     }
   }
   const auto n = static_cast<std::ptrdiff_t>(cubes.size());
+  FirstException failed;
 #pragma omp parallel
   {
     std::vector<float> cx, cy, cz;  // the candidates, one array per coordinate
     std::vector<std::pair<std::size_t, std::size_t>> runs;  // runs of sorted points to copy
 #pragma omp for schedule(dynamic, 8)
     for (std::ptrdiff_t a = 0; a < n; ++a) {
-      const auto [x, y, z] = CellGrid::coordinates(cubes[static_cast<std::size_t>(a)]);
-      runs.clear();
-      std::size_t m = 0;
-      for (int column = 0; column < kColumns; ++column) {
-        const std::int64_t oz_max = column_reach[static_cast<std::size_t>(column)];
-        if (oz_max < 0) continue;  // no cube of this column comes within the radius
-        const std::int64_t ox = column / kSide - kDiv, oy = column % kSide - kDiv;
-        // The cubes of a column that can hold neighbours (z - oz_max .. z + oz_max) are
-        // consecutive in the sorted order, and so are their points: one run to copy.
-        const std::uint64_t hi = key(x + ox, y + oy, z + oz_max);
-        const std::size_t b = column_start[static_cast<std::size_t>(a) * kColumns + static_cast<std::size_t>(column)];
-        std::size_t e = b;
-        while (e < cubes.size() && cubes[e] <= hi) ++e;
-        if (e == b) continue;
-        runs.emplace_back(first[b], first[e]);
-        m += first[e] - first[b];
-      }
-      if (cx.size() < m) cx.resize(m), cy.resize(m), cz.resize(m);
-      std::size_t filled = 0;
-      for (const auto& [from, to] : runs) {
-        std::copy(sorted_x.begin() + static_cast<std::ptrdiff_t>(from), sorted_x.begin() + static_cast<std::ptrdiff_t>(to), cx.begin() + static_cast<std::ptrdiff_t>(filled));
-        std::copy(sorted_y.begin() + static_cast<std::ptrdiff_t>(from), sorted_y.begin() + static_cast<std::ptrdiff_t>(to), cy.begin() + static_cast<std::ptrdiff_t>(filled));
-        std::copy(sorted_z.begin() + static_cast<std::ptrdiff_t>(from), sorted_z.begin() + static_cast<std::ptrdiff_t>(to), cz.begin() + static_cast<std::ptrdiff_t>(filled));
-        filled += to - from;
-      }
-      for (std::size_t k = first[static_cast<std::size_t>(a)]; k < first[static_cast<std::size_t>(a) + 1]; ++k) {
-        const std::uint32_t i = keyed[k].second;
-        const Eigen::Vector3f& p = cloud.points[i];
-        const float px = p.x(), py = p.y(), pz = p.z();
-        const float* ax = cx.data();
-        const float* ay = cy.data();
-        const float* az = cz.data();
-        const NeighbourSums sums = neighbour_sums(ax, ay, az, m, px, py, pz, r2);
-        const float count = sums.v[0], sx = sums.v[1], sy = sums.v[2], sz = sums.v[3], sxx = sums.v[4], sxy = sums.v[5],
-                    sxz = sums.v[6], syy = sums.v[7], syz = sums.v[8], szz = sums.v[9];
-        if (count < 3) continue;  // stays NaN
-        const double nn = count, mx = sx / nn, my = sy / nn, mz = sz / nn;
-        Eigen::Matrix3d cov;
-        cov << sxx - nn * mx * mx, sxy - nn * mx * my, sxz - nn * mx * mz,
-               sxy - nn * mx * my, syy - nn * my * my, syz - nn * my * mz,
-               sxz - nn * mx * mz, syz - nn * my * mz, szz - nn * mz * mz;
-        plane_of_covariance(cov, p, options.viewpoint, cloud.normals[i], cloud.curvature[i]);
-      }
+      failed.run([&] {
+        const auto [x, y, z] = CellGrid::coordinates(cubes[static_cast<std::size_t>(a)]);
+        runs.clear();
+        std::size_t m = 0;
+        for (int column = 0; column < kColumns; ++column) {
+          const std::int64_t oz_max = column_reach[static_cast<std::size_t>(column)];
+          if (oz_max < 0) continue;  // no cube of this column comes within the radius
+          const std::int64_t ox = column / kSide - kDiv, oy = column % kSide - kDiv;
+          // The cubes of a column that can hold neighbours (z - oz_max .. z + oz_max) are
+          // consecutive in the sorted order, and so are their points: one run to copy.
+          const std::uint64_t hi = key(x + ox, y + oy, z + oz_max);
+          const std::size_t b = column_start[static_cast<std::size_t>(a) * kColumns + static_cast<std::size_t>(column)];
+          std::size_t e = b;
+          while (e < cubes.size() && cubes[e] <= hi) ++e;
+          if (e == b) continue;
+          runs.emplace_back(first[b], first[e]);
+          m += first[e] - first[b];
+        }
+        if (cx.size() < m) cx.resize(m), cy.resize(m), cz.resize(m);
+        std::size_t filled = 0;
+        for (const auto& [from, to] : runs) {
+          std::copy(sorted_x.begin() + static_cast<std::ptrdiff_t>(from), sorted_x.begin() + static_cast<std::ptrdiff_t>(to), cx.begin() + static_cast<std::ptrdiff_t>(filled));
+          std::copy(sorted_y.begin() + static_cast<std::ptrdiff_t>(from), sorted_y.begin() + static_cast<std::ptrdiff_t>(to), cy.begin() + static_cast<std::ptrdiff_t>(filled));
+          std::copy(sorted_z.begin() + static_cast<std::ptrdiff_t>(from), sorted_z.begin() + static_cast<std::ptrdiff_t>(to), cz.begin() + static_cast<std::ptrdiff_t>(filled));
+          filled += to - from;
+        }
+        for (std::size_t k = first[static_cast<std::size_t>(a)]; k < first[static_cast<std::size_t>(a) + 1]; ++k) {
+          const std::uint32_t i = keyed[k].second;
+          const Eigen::Vector3f& p = cloud.points[i];
+          const float px = p.x(), py = p.y(), pz = p.z();
+          const float* ax = cx.data();
+          const float* ay = cy.data();
+          const float* az = cz.data();
+          const NeighbourSums sums = neighbour_sums(ax, ay, az, m, px, py, pz, r2);
+          const float count = sums.v[0], sx = sums.v[1], sy = sums.v[2], sz = sums.v[3], sxx = sums.v[4], sxy = sums.v[5],
+                      sxz = sums.v[6], syy = sums.v[7], syz = sums.v[8], szz = sums.v[9];
+          if (count < 3) continue;  // stays NaN
+          const double nn = count, mx = sx / nn, my = sy / nn, mz = sz / nn;
+          Eigen::Matrix3d cov;
+          cov << sxx - nn * mx * mx, sxy - nn * mx * my, sxz - nn * mx * mz,
+                 sxy - nn * mx * my, syy - nn * my * my, syz - nn * my * mz,
+                 sxz - nn * mx * mz, syz - nn * my * mz, szz - nn * mz * mz;
+          plane_of_covariance(cov, p, options.viewpoint, cloud.normals[i], cloud.curvature[i]);
+        }
+      });
     }
   }
+  failed.rethrow();
 }
 
 void estimate_normals_organized(PointCloud& cloud, const NormalOptions& options) {
@@ -248,33 +253,37 @@ void estimate_normals_organized(PointCloud& cloud, const NormalOptions& options)
   cloud.curvature.assign(cloud.size(), kNaN);
   const int W = cloud.width, H = cloud.height;
   const float r2 = options.radius_m * options.radius_m;
+  FirstException failed;
 #pragma omp parallel
   {
     std::vector<std::uint32_t> neighbours;
 #pragma omp for schedule(dynamic, 16)
     for (int v = 0; v < H; ++v) {
-      for (int u = 0; u < W; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * static_cast<std::size_t>(W) + static_cast<std::size_t>(u);
-        const Eigen::Vector3f& p = cloud.points[i];
-        if (!p.allFinite() || !(p.z() > 0)) continue;
-        // The radius covers about focal * radius / z pixels at depth z.
-        const int half = std::clamp(static_cast<int>(std::ceil(options.focal_px * options.radius_m / p.z())), 1, options.max_window_px);
-        neighbours.clear();
-        for (int dv = -half; dv <= half; ++dv) {
-          const int vv = v + dv;
-          if (vv < 0 || vv >= H) continue;
-          for (int du = -half; du <= half; ++du) {
-            const int uu = u + du;
-            if (uu < 0 || uu >= W) continue;
-            const std::size_t j = static_cast<std::size_t>(vv) * static_cast<std::size_t>(W) + static_cast<std::size_t>(uu);
-            if ((cloud.points[j] - p).squaredNorm() <= r2) neighbours.push_back(static_cast<std::uint32_t>(j));  // NaN fails
+      failed.run([&] {
+        for (int u = 0; u < W; ++u) {
+          const std::size_t i = static_cast<std::size_t>(v) * static_cast<std::size_t>(W) + static_cast<std::size_t>(u);
+          const Eigen::Vector3f& p = cloud.points[i];
+          if (!p.allFinite() || !(p.z() > 0)) continue;
+          // The radius covers about focal * radius / z pixels at depth z.
+          const int half = std::clamp(static_cast<int>(std::ceil(options.focal_px * options.radius_m / p.z())), 1, options.max_window_px);
+          neighbours.clear();
+          for (int dv = -half; dv <= half; ++dv) {
+            const int vv = v + dv;
+            if (vv < 0 || vv >= H) continue;
+            for (int du = -half; du <= half; ++du) {
+              const int uu = u + du;
+              if (uu < 0 || uu >= W) continue;
+              const std::size_t j = static_cast<std::size_t>(vv) * static_cast<std::size_t>(W) + static_cast<std::size_t>(uu);
+              if ((cloud.points[j] - p).squaredNorm() <= r2) neighbours.push_back(static_cast<std::uint32_t>(j));  // NaN fails
+            }
           }
+          fit_normal(cloud, i, [&](std::size_t k) { return neighbours[k]; }, neighbours.size(), options.viewpoint,
+                     cloud.normals[i], cloud.curvature[i]);
         }
-        fit_normal(cloud, i, [&](std::size_t k) { return neighbours[k]; }, neighbours.size(), options.viewpoint,
-                   cloud.normals[i], cloud.curvature[i]);
-      }
+      });
     }
   }
+  failed.rethrow();
 }
 
 }  // namespace viewpose

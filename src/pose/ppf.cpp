@@ -2,15 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
 #include <limits>
-#include <mutex>
 #include <numeric>
 
 #include <Eigen/Geometry>
 
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/kdtree.hpp"
+#include "viewpose/core/threads.hpp"
 
 namespace viewpose {
 
@@ -189,29 +188,27 @@ PpfTable make_ppf_table(std::span<const Eigen::Vector3f> points, std::span<const
   };
   std::vector<Pairs> by_point(n);
   const float max_d = static_cast<float>(diameter_m);
-  std::exception_ptr failed;  // (an exception may not leave a parallel loop: the first is rethrown after it)
-  std::mutex failed_mutex;
+  FirstException failed;
 #pragma omp parallel for schedule(dynamic, 16)
-  for (std::ptrdiff_t pi = 0; pi < static_cast<std::ptrdiff_t>(n); ++pi) try {
-    const auto i = static_cast<std::size_t>(pi);
-    Pairs& out = by_point[i];
-    const Transform T_local_model = local_frame(t.sampled.points[i], t.sampled.normals[i]);
-    for (std::size_t j = 0; j < n; ++j) {
-      Feature f;
-      if (i == j || !pair_feature(t.sampled.points[i], t.sampled.normals[i], t.sampled.points[j], t.sampled.normals[j], f) ||
-          f.distance > max_d) {
-        continue;
+  for (std::ptrdiff_t pi = 0; pi < static_cast<std::ptrdiff_t>(n); ++pi) {
+    failed.run([&] {
+      const auto i = static_cast<std::size_t>(pi);
+      Pairs& out = by_point[i];
+      const Transform T_local_model = local_frame(t.sampled.points[i], t.sampled.normals[i]);
+      for (std::size_t j = 0; j < n; ++j) {
+        Feature f;
+        if (i == j || !pair_feature(t.sampled.points[i], t.sampled.normals[i], t.sampled.points[j], t.sampled.normals[j], f) ||
+            f.distance > max_d) {
+          continue;
+        }
+        const int d = std::min(distance_bins - 1, static_cast<int>(f.distance / step_m));
+        const auto a = [&](float x) { return std::min(feature_angle_bins - 1, static_cast<int>(x / angle_step)); };
+        out.keys.push_back(static_cast<std::uint32_t>(key_of(feature_angle_bins, d, a(f.a1), a(f.a2), a(f.a3))));
+        out.entries.push_back(PpfTable::entry(static_cast<std::uint32_t>(i), alpha_units(pair_alpha(T_local_model, t.sampled.points[j]))));
       }
-      const int d = std::min(distance_bins - 1, static_cast<int>(f.distance / step_m));
-      const auto a = [&](float x) { return std::min(feature_angle_bins - 1, static_cast<int>(x / angle_step)); };
-      out.keys.push_back(static_cast<std::uint32_t>(key_of(feature_angle_bins, d, a(f.a1), a(f.a2), a(f.a3))));
-      out.entries.push_back(PpfTable::entry(static_cast<std::uint32_t>(i), alpha_units(pair_alpha(T_local_model, t.sampled.points[j]))));
-    }
-  } catch (...) {
-    const std::lock_guard lock(failed_mutex);
-    if (!failed) failed = std::current_exception();
+    });
   }
-  if (failed) std::rethrow_exception(failed);
+  failed.rethrow();
   std::size_t pairs = 0;
   for (const Pairs& p : by_point) pairs += p.keys.size();
   if (pairs >= std::numeric_limits<std::uint32_t>::max()) {
@@ -320,58 +317,66 @@ std::vector<PpfHypothesis> PpfModel::hypotheses(const OrientedPoints& scene) con
   const std::uint32_t* entries = table.entries.data();
   constexpr std::uint32_t alpha_mask = (std::uint32_t{1} << PpfTable::kAlphaBits) - 1;
 
+  FirstException failed;
 #pragma omp parallel
   {
-    std::vector<std::uint32_t> votes(model_points * static_cast<std::size_t>(bins), 0);
-    // The slots voted for, each once: written on every vote and counted on a slot's first, without
-    // a branch the processor would mispredict half the time (one more, for the write after all).
-    std::vector<std::uint32_t> touched(votes.size() + 1), neighbours;
+    std::vector<std::uint32_t> votes, touched, neighbours;
+    // (A thread that cannot have its buffers runs no iteration: failed.run skips them all.)
+    failed.run([&] {
+      votes.assign(model_points * static_cast<std::size_t>(bins), 0);
+      // The slots voted for, each once: written on every vote and counted on a slot's first, without
+      // a branch the processor would mispredict half the time (one more, for the write after all).
+      touched.resize(votes.size() + 1);
+    });
     std::size_t n_touched = 0;
 #pragma omp for schedule(dynamic, 16)
     for (std::ptrdiff_t r = 0; r < static_cast<std::ptrdiff_t>(references); ++r) {
-      const std::size_t s1 = static_cast<std::size_t>(r) * stride;
-      const Eigen::Vector3f& p1 = scene.points[s1];
-      const Eigen::Vector3f& n1 = scene.normals[s1];
-      const Transform T_local_scene = local_frame(p1, n1);
-      tree.radius_search(p1, radius, neighbours);
-      // The peak: the model point and angle most pairs agree on (of equals, the lowest slot).
-      std::uint32_t best = 0, best_slot = 0;
-      for (const std::uint32_t s2 : neighbours) {
-        Feature f;
-        if (s2 == s1 || !pair_feature(p1, n1, scene.points[s2], scene.normals[s2], f)) continue;
-        const std::uint32_t alpha_scene_fine = alpha_units(pair_alpha(T_local_scene, scene.points[s2]));
-        int d[2], a1[2], a2[2], a3[2];
-        const double spread = options_.spread_fraction;
-        const int nd = bins_of(f.distance / step_m_, distance_bins_, spread, d);
-        const int n1b = bins_of(static_cast<float>(f.a1 / angle_step), feature_angle_bins_, spread, a1);
-        const int n2b = bins_of(static_cast<float>(f.a2 / angle_step), feature_angle_bins_, spread, a2);
-        const int n3b = bins_of(static_cast<float>(f.a3 / angle_step), feature_angle_bins_, spread, a3);
-        for (int i = 0; i < nd; ++i)
-          for (int j = 0; j < n1b; ++j)
-            for (int k = 0; k < n2b; ++k)
-              for (int l = 0; l < n3b; ++l) {
-                const std::size_t kk = key(d[i], a1[j], a2[k], a3[l]);
-                if (key_start[kk + 1] - key_start[kk] > max_bucket) continue;
-                for (std::uint32_t e = key_start[kk]; e < key_start[kk + 1]; ++e) {
-                  const std::uint32_t point = entries[e] >> PpfTable::kAlphaBits, alpha = entries[e] & alpha_mask;
-                  // phi = alpha_scene - alpha_model in fine units, wrapped into [0, 2 pi), and its bin.
-                  const std::size_t slot = point * static_cast<std::size_t>(bins) + phi_bin_[alpha_scene_fine + kAlphaUnits - alpha];
-                  const std::uint32_t v = ++votes[slot];
-                  touched[n_touched] = static_cast<std::uint32_t>(slot);
-                  n_touched += v == 1;
-                  if (v > best || (v == best && slot < best_slot)) best = v, best_slot = static_cast<std::uint32_t>(slot);
+      failed.run([&] {
+        const std::size_t s1 = static_cast<std::size_t>(r) * stride;
+        const Eigen::Vector3f& p1 = scene.points[s1];
+        const Eigen::Vector3f& n1 = scene.normals[s1];
+        const Transform T_local_scene = local_frame(p1, n1);
+        tree.radius_search(p1, radius, neighbours);
+        // The peak: the model point and angle most pairs agree on (of equals, the lowest slot).
+        std::uint32_t best = 0, best_slot = 0;
+        for (const std::uint32_t s2 : neighbours) {
+          Feature f;
+          if (s2 == s1 || !pair_feature(p1, n1, scene.points[s2], scene.normals[s2], f)) continue;
+          const std::uint32_t alpha_scene_fine = alpha_units(pair_alpha(T_local_scene, scene.points[s2]));
+          int d[2], a1[2], a2[2], a3[2];
+          const double spread = options_.spread_fraction;
+          const int nd = bins_of(f.distance / step_m_, distance_bins_, spread, d);
+          const int n1b = bins_of(static_cast<float>(f.a1 / angle_step), feature_angle_bins_, spread, a1);
+          const int n2b = bins_of(static_cast<float>(f.a2 / angle_step), feature_angle_bins_, spread, a2);
+          const int n3b = bins_of(static_cast<float>(f.a3 / angle_step), feature_angle_bins_, spread, a3);
+          for (int i = 0; i < nd; ++i)
+            for (int j = 0; j < n1b; ++j)
+              for (int k = 0; k < n2b; ++k)
+                for (int l = 0; l < n3b; ++l) {
+                  const std::size_t kk = key(d[i], a1[j], a2[k], a3[l]);
+                  if (key_start[kk + 1] - key_start[kk] > max_bucket) continue;
+                  for (std::uint32_t e = key_start[kk]; e < key_start[kk + 1]; ++e) {
+                    const std::uint32_t point = entries[e] >> PpfTable::kAlphaBits, alpha = entries[e] & alpha_mask;
+                    // phi = alpha_scene - alpha_model in fine units, wrapped into [0, 2 pi), and its bin.
+                    const std::size_t slot = point * static_cast<std::size_t>(bins) + phi_bin_[alpha_scene_fine + kAlphaUnits - alpha];
+                    const std::uint32_t v = ++votes[slot];
+                    touched[n_touched] = static_cast<std::uint32_t>(slot);
+                    n_touched += v == 1;
+                    if (v > best || (v == best && slot < best_slot)) best = v, best_slot = static_cast<std::uint32_t>(slot);
+                  }
                 }
-              }
-      }
-      for (std::size_t i = 0; i < n_touched; ++i) votes[touched[i]] = 0;
-      n_touched = 0;
-      if (best == 0) continue;
-      const std::uint32_t m = best_slot / static_cast<std::uint32_t>(bins);
-      const double phi = (static_cast<double>(best_slot % static_cast<std::uint32_t>(bins)) + 0.5) * angle_step;
-      const Transform Rx = make_transform(Eigen::AngleAxisd(phi, Eigen::Vector3d::UnitX()).toRotationMatrix(), Eigen::Vector3d::Zero());
-      peaks[static_cast<std::size_t>(r)] = {T_local_scene.inverse() * Rx * T_local_model_[m], best};
+        }
+        for (std::size_t i = 0; i < n_touched; ++i) votes[touched[i]] = 0;
+        n_touched = 0;
+        if (best == 0) return;
+        const std::uint32_t m = best_slot / static_cast<std::uint32_t>(bins);
+        const double phi = (static_cast<double>(best_slot % static_cast<std::uint32_t>(bins)) + 0.5) * angle_step;
+        const Transform Rx = make_transform(Eigen::AngleAxisd(phi, Eigen::Vector3d::UnitX()).toRotationMatrix(), Eigen::Vector3d::Zero());
+        peaks[static_cast<std::size_t>(r)] = {T_local_scene.inverse() * Rx * T_local_model_[m], best};
+      });
     }
   }
+  failed.rethrow();
 
   // Poses clustered, most votes first: each joins the first cluster (most votes) it is near.
   std::vector<std::size_t> order(peaks.size());

@@ -40,15 +40,17 @@ void for_each_index(std::ptrdiff_t n, bool parallel, std::ptrdiff_t grain, const
     for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
     return;
   }
+  FirstException failed;
   if (omp_in_parallel()) {
     // (Unsigned: clang compares the loop's bound with its own unsigned count of iterations.)
     const auto count = static_cast<std::size_t>(n), chunk = static_cast<std::size_t>(grain);
-#pragma omp taskloop grainsize(chunk) shared(body)
-    for (std::size_t i = 0; i < count; ++i) body(static_cast<std::ptrdiff_t>(i));
+#pragma omp taskloop grainsize(chunk) shared(body, failed)
+    for (std::size_t i = 0; i < count; ++i) failed.run([&] { body(static_cast<std::ptrdiff_t>(i)); });
   } else {
 #pragma omp parallel for schedule(dynamic, grain)
-    for (std::ptrdiff_t i = 0; i < n; ++i) body(i);
+    for (std::ptrdiff_t i = 0; i < n; ++i) failed.run([&] { body(i); });
   }
+  failed.rethrow();
 }
 
 }  // namespace
@@ -81,22 +83,13 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
   // Pair tables may be made later, on a cluster's thread: their options are checked now.
   if (options_.match.source != PoseSource::vfh) check_ppf_options(options_.match.ppf);
   if (db.objects.size() <= options_.run.prepare_objects_up_to) {
-    // Each object on a thread. (An exception may not leave a parallel loop: the first is kept and
-    // thrown after it.)
+    // Each object on a thread.
     const auto each_object = [&](const auto& prepare) {
       const auto objects = static_cast<std::ptrdiff_t>(db.objects.size());
-      std::exception_ptr failed;
-      std::mutex failed_mutex;
+      FirstException failed;
 #pragma omp parallel for schedule(dynamic, 1)
-      for (std::ptrdiff_t o = 0; o < objects; ++o) {
-        try {
-          prepare(static_cast<std::uint32_t>(o));
-        } catch (...) {
-          const std::lock_guard lock(failed_mutex);
-          if (!failed) failed = std::current_exception();
-        }
-      }
-      if (failed) std::rethrow_exception(failed);
+      for (std::ptrdiff_t o = 0; o < objects; ++o) failed.run([&] { prepare(static_cast<std::uint32_t>(o)); });
+      failed.rethrow();
     };
     each_object([&](std::uint32_t o) { icp_target(o).grid(options_.icp.grid_cell_m, options_.icp.reach_m()); });
     // (With touching, only the objects voted for in a detection's rest: made on first use.)
@@ -220,16 +213,18 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     for (std::size_t c = 0; c < n; ++c) order[c] = c;
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return seg.clusters[a].size() > seg.clusters[b].size(); });
     // Each cluster a task: a thread with no cluster left takes up the tasks of another's stages.
+    FirstException failed;
 #pragma omp parallel
 #pragma omp single
     for (const std::size_t c : order) {
-#pragma omp task firstprivate(c) shared(parts, seg, frame, start)
-      {
+#pragma omp task firstprivate(c) shared(parts, seg, frame, start, failed)
+      failed.run([&] {
         Recognition& part = parts[c];
         part.started = start;
         if (!out_of_time(part)) recognize_region(cluster_points(seg.points, seg.clusters[c]), frame, part, 0);
-      }
+      });
     }
+    failed.rethrow();
     for (Recognition& part : parts) merge_part(std::move(part), out);
   }
   if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
@@ -261,13 +256,11 @@ void Recognizer::resolve_scene(const Frame& frame, Recognition& out) const {
     return da.verification.score > db.verification.score;
   });
   std::vector<std::vector<std::uint32_t>> claims(order.size());
-  const auto n = static_cast<std::ptrdiff_t>(order.size());
-#pragma omp parallel for schedule(dynamic, 1) if (options_.run.parallel_hypotheses)
-  for (std::ptrdiff_t k = 0; k < n; ++k) {
+  for_each_index(static_cast<std::ptrdiff_t>(order.size()), options_.run.parallel_hypotheses, 1, [&](std::ptrdiff_t k) {
     const Detection& d = out.detections[order[static_cast<std::size_t>(k)]];
     claims[static_cast<std::size_t>(k)] =
         claimed_pixels(verify_model(d.object_index), d.T_camera_object, frame.depth, frame.K, options_.verify);
-  }
+  });
   const std::vector<ClaimVerdict> verdicts = resolve_claims(claims, options_.accept.scene_claims);
   std::vector<char> keep(order.size(), 0);
   for (std::size_t k = 0; k < order.size(); ++k) keep[order[k]] = verdicts[k].kept ? 1 : 0;

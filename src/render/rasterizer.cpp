@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "viewpose/core/threads.hpp"
 #include "viewpose/core/error.hpp"
 
 namespace viewpose {
@@ -186,11 +187,15 @@ std::vector<RenderedFrame> render_views(const TriangleMesh& mesh, std::span<cons
   K.validate();
   mesh.check_consistent();
   std::vector<RenderedFrame> frames(T_camera_object.size());
+  FirstException failed;
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t i = 0; i < T_camera_object.size(); ++i) {
-    const MeshInstance instance{&mesh, T_camera_object[i]};
-    frames[i] = render(std::span(&instance, 1), K, options);
+    failed.run([&] {
+      const MeshInstance instance{&mesh, T_camera_object[i]};
+      frames[i] = render(std::span(&instance, 1), K, options);
+    });
   }
+  failed.rethrow();
   return frames;
 }
 

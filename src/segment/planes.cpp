@@ -243,25 +243,29 @@ PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o)
   const int chunks = std::max(1, thread_count());
   std::vector<std::vector<std::vector<std::uint32_t>>> found(static_cast<std::size_t>(chunks),
                                                              std::vector<std::vector<std::uint32_t>>(planes + 1));
+  FirstException failed;
 #pragma omp parallel for schedule(static, 1) num_threads(chunks)
   for (int chunk = 0; chunk < chunks; ++chunk) {
-    auto& lists = found[static_cast<std::size_t>(chunk)];  // one per plane, then the remaining points
-    const std::size_t begin = cloud.size() * static_cast<std::size_t>(chunk) / static_cast<std::size_t>(chunks),
-                      end = cloud.size() * static_cast<std::size_t>(chunk + 1) / static_cast<std::size_t>(chunks);
-    for (std::size_t i = begin; i < end; ++i) {
-      const Eigen::Vector3f& p = cloud.points[i];
-      if (!p.allFinite()) continue;
-      bool on_plane = false;
-      for (std::size_t k = 0; k < planes; ++k) {
-        const Eigen::Vector4f& c = out.removed[k].coefficients;
-        if (std::abs(c.head<3>().dot(p) + c[3]) <= o.distance_threshold_m) {
-          lists[k].push_back(static_cast<std::uint32_t>(i));
-          on_plane = true;
+    failed.run([&] {
+      auto& lists = found[static_cast<std::size_t>(chunk)];  // one per plane, then the remaining points
+      const std::size_t begin = cloud.size() * static_cast<std::size_t>(chunk) / static_cast<std::size_t>(chunks),
+                        end = cloud.size() * static_cast<std::size_t>(chunk + 1) / static_cast<std::size_t>(chunks);
+      for (std::size_t i = begin; i < end; ++i) {
+        const Eigen::Vector3f& p = cloud.points[i];
+        if (!p.allFinite()) continue;
+        bool on_plane = false;
+        for (std::size_t k = 0; k < planes; ++k) {
+          const Eigen::Vector4f& c = out.removed[k].coefficients;
+          if (std::abs(c.head<3>().dot(p) + c[3]) <= o.distance_threshold_m) {
+            lists[k].push_back(static_cast<std::uint32_t>(i));
+            on_plane = true;
+          }
         }
+        if (!on_plane) lists[planes].push_back(static_cast<std::uint32_t>(i));
       }
-      if (!on_plane) lists[planes].push_back(static_cast<std::uint32_t>(i));
-    }
+    });
   }
+  failed.rethrow();
   for (std::size_t k = 0; k <= planes; ++k) {
     std::vector<std::uint32_t>& all = k < planes ? out.removed[k].inliers : out.remaining;
     all.clear();
