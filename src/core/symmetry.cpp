@@ -192,9 +192,18 @@ std::vector<Transform> symmetry_transforms(const Symmetries& s, int continuous_s
 
 Transform canonical_pose(const Transform& T, const Symmetries& s) {
   if (s.empty()) return T;
-  const Eigen::Matrix3d R = T.linear();
+  // The reference the pose's rotation is brought nearest (canonical_pose's doc says why): the
+  // object's x on the camera's x, its z up-and-toward the camera, half way between the image's up
+  // (-y) and the camera (-z), its y completing the frame. In the maths below R is the rotation
+  // relative to it, R_ref^T R_camera_object.
+  const double h = std::sqrt(0.5);
+  Eigen::Matrix3d R_ref;
+  R_ref << 1, 0, 0,
+           0, -h, -h,
+           0, h, -h;
+  const Eigen::Matrix3d R = R_ref.transpose() * T.linear();
   if (s.continuous.size() >= 2) {
-    // Any rotation about the centre: the one that leaves the object's axes on the camera's.
+    // Any rotation about the centre: the one that leaves the object's axes on the reference's.
     const Eigen::Vector3d c = s.continuous[0].offset_m;
     return T * make_transform(R.transpose(), c - R.transpose() * c);
   }
@@ -205,7 +214,7 @@ Transform canonical_pose(const Transform& T, const Symmetries& s) {
   for (const Transform& D : discrete) {
     Transform S = D;
     if (!s.continuous.empty()) {
-      // The turn about the axis that brings R * Rot(theta) * R_D nearest the identity, in closed
+      // The turn about the axis that brings R * Rot(theta) * R_D nearest the reference, in closed
       // form: trace(A Rot(theta)) with A = R_D R is c cos + s sin + const.
       const Eigen::Vector3d a = s.continuous[0].axis.normalized();
       const Eigen::Matrix3d A = D.linear() * R;

@@ -88,5 +88,30 @@ TEST(Symmetry, EquivalentPosesGiveTheSameCanonicalPose) {
   EXPECT_LT((canonical_pose(T, Symmetries{}).matrix() - T.matrix()).norm(), 1e-12);
 }
 
+TEST(Symmetry, ObjectsStandingAsModelledAreReportedUprightForAnyCameraTilt) {
+  // A can and a box standing on a table (world z up, as their meshes are drawn), seen by a camera
+  // looking level, down at 30 and 60 degrees, and straight down; each pose given upside down (an
+  // equivalent pose). The canonical pose stands it up again: its z along the world's up.
+  const TriangleMesh can = make_can(), box = make_box_mesh({0.06f, 0.095f, 0.2f});
+  const Symmetries can_s = find_symmetries(can), box_s = find_symmetries(box);
+  for (const double tilt_deg : {0.0, 30.0, 60.0, 90.0}) {
+    const double t = tilt_deg * std::numbers::pi / 180.0;
+    Eigen::Matrix3d R_world_camera;  // columns: the camera's x (right), y (down in the image), z (forward)
+    R_world_camera.col(0) = Eigen::Vector3d::UnitX();
+    R_world_camera.col(1) = Eigen::Vector3d(0, -std::sin(t), -std::cos(t));
+    R_world_camera.col(2) = Eigen::Vector3d(0, std::cos(t), -std::sin(t));
+    const Eigen::Vector3d up_in_camera = R_world_camera.transpose() * Eigen::Vector3d::UnitZ();
+    for (const double yaw_deg : {0.0, 50.0, 140.0, 235.0}) {
+      const Eigen::Matrix3d R_world_object = Eigen::AngleAxisd(yaw_deg * std::numbers::pi / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      const Transform upright = make_transform(R_world_camera.transpose() * R_world_object, {0.02, 0.05, 0.8});
+      const Transform upside_down = upright * turn({1, 0, 0}, 180);
+      for (const auto& [name, s] : {std::pair{"can", &can_s}, std::pair{"box", &box_s}}) {
+        const Transform c = canonical_pose(upside_down, *s);
+        EXPECT_GT(c.linear().col(2).dot(up_in_camera), 0.999) << name << ", camera " << tilt_deg << " degrees down, yaw " << yaw_deg;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace viewpose

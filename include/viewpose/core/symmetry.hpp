@@ -44,7 +44,15 @@ Symmetries find_symmetries(const TriangleMesh& mesh, const SymmetryOptions& opti
 std::vector<Transform> symmetry_transforms(const Symmetries& symmetries, int continuous_steps = 360);
 
 /// Among the poses T_camera_object * S that the symmetries make equivalent, the one whose rotation is
-/// nearest the camera's own axes (the identity): the same answer for every equivalent input.
+/// nearest a fixed reference: the same answer for every equivalent input. The reference stands the
+/// object as it was modelled, its z up, for a camera looking anywhere from level to straight down:
+/// object z toward (0, -1, -1) / sqrt 2 in the camera frame (up in the image and toward the
+/// camera), object x along the camera's x. CAD models are mostly drawn standing on their base with
+/// z up (YCB-Video's, LineMOD's, T-LESS's), and objects stand so on a table: a can whose ends look
+/// alike is then reported upright, as it stands, not upside down. (The camera's own axes, the
+/// reference before, put the object's z along the viewing direction, pointing down into a table
+/// seen from above: real YCB-Video frames, AR 0.495 -> 0.511; the can upright, 180 -> 20 degrees
+/// off the truth about its axis.) What depth cannot see (a printed front) stays a coin flip.
 Transform canonical_pose(const Transform& T_camera_object, const Symmetries& symmetries);
 
 }  // namespace viewpose

@@ -153,8 +153,8 @@ struct AcceptOptions {
   /// (a jug with its handle behind): its half turns are refined and verified at once, before the next
   /// view (0: not). With try_half_turns.
   double near_miss_conflict_fraction = 0.15;
-  /// Report a symmetric object's pose in one canonical form among its equivalent ones (rotation
-  /// nearest the camera's axes), so that a box or a can does not flip from frame to frame.
+  /// Report a symmetric object's pose in one canonical form among its equivalent ones (canonical_pose:
+  /// the object standing as modelled, z up), so that a box or a can does not flip from frame to frame.
   bool canonical_poses = true;
   /// The frame as a whole (pose/scene_claims.hpp): of detections that explain the same pixels,
   /// the more confident is kept; one whose evidence another already explains is dropped.
