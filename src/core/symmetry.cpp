@@ -214,8 +214,9 @@ Transform canonical_pose(const Transform& T, const Symmetries& s) {
   for (const Transform& D : discrete) {
     Transform S = D;
     if (!s.continuous.empty()) {
-      // The turn about the axis that brings R * Rot(theta) * R_D nearest the reference, in closed
-      // form: trace(A Rot(theta)) with A = R_D R is c cos + s sin + const.
+      // The turn about the axis that brings R_camera_object * Rot(theta) * R_D nearest R_ref (the
+      // relative R * Rot(theta) * R_D nearest the identity), in closed form: trace(A Rot(theta))
+      // with A = R_D R is c cos + s sin + const.
       const Eigen::Vector3d a = s.continuous[0].axis.normalized();
       const Eigen::Matrix3d A = D.linear() * R;
       Eigen::Matrix3d ax;

@@ -18,10 +18,12 @@ std::string openmp_wait() {
   return said.empty() ? "libgomp's default (spin 300000)" : said;
 }
 
-void FirstException::keep(std::exception_ptr e) noexcept {
+void FirstException::keep(std::ptrdiff_t index, std::exception_ptr e) noexcept {
   const std::lock_guard lock(mutex_);
-  if (!first_) first_ = std::move(e);
-  failed_.store(true, std::memory_order_relaxed);
+  if (index < failed_index_.load(std::memory_order_relaxed)) {
+    first_ = std::move(e);
+    failed_index_.store(index, std::memory_order_relaxed);
+  }
 }
 
 void FirstException::rethrow() {

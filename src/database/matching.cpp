@@ -133,7 +133,7 @@ std::vector<Match> ViewIndex::nearest(const Vfh& query, std::size_t per_object, 
   FirstException failed;
 #pragma omp parallel for schedule(static, 1) num_threads(shares) if (shares > 1)
   for (int share = 0; share < shares; ++share) {
-    failed.run([&] {
+    failed.run(share, [&] {
       std::vector<Near>& heap = heaps[static_cast<std::size_t>(share)];
       heap.reserve(keep + 1);
       const std::size_t begin = n * static_cast<std::size_t>(share) / static_cast<std::size_t>(shares),

@@ -713,7 +713,7 @@ ViewDatabase build_view_database(std::span<const ObjectModel> objects, const Dat
     FirstException failed;
 #pragma omp parallel for schedule(dynamic)
     for (std::size_t i = 0; i < poses.size(); ++i) {
-      failed.run([&] {
+      failed.run(static_cast<std::ptrdiff_t>(i), [&] {
         entries[i] = describe_view(frames[i].depth, poses[i], static_cast<std::uint32_t>(o), params, &described[i]);
       });
     }

@@ -28,13 +28,13 @@ Description describe(PointCloud points, const DescribeOptions& options, Describe
 #pragma omp parallel sections num_threads(2)
   {
 #pragma omp section
-    failed.run([&] {
+    failed.run(0, [&] {
       const auto tv = Clock::now();
       d.vfh = compute_vfh(kept.points, kept.normals, options.vfh);
       vfh_ms = ms_since(tv);
     });
 #pragma omp section
-    failed.run([&] {
+    failed.run(1, [&] {
       const auto tc = Clock::now();
       d.crh = compute_crh(kept.normals, d.centroid);
       crh_ms = ms_since(tc);

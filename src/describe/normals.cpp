@@ -196,7 +196,7 @@ void estimate_normals(PointCloud& cloud, const NormalOptions& options) {
     std::vector<std::pair<std::size_t, std::size_t>> runs;  // runs of sorted points to copy
 #pragma omp for schedule(dynamic, 8)
     for (std::ptrdiff_t a = 0; a < n; ++a) {
-      failed.run([&] {
+      failed.run(a, [&] {
         const auto [x, y, z] = CellGrid::coordinates(cubes[static_cast<std::size_t>(a)]);
         runs.clear();
         std::size_t m = 0;
@@ -259,7 +259,7 @@ void estimate_normals_organized(PointCloud& cloud, const NormalOptions& options)
     std::vector<std::uint32_t> neighbours;
 #pragma omp for schedule(dynamic, 16)
     for (int v = 0; v < H; ++v) {
-      failed.run([&] {
+      failed.run(v, [&] {
         for (int u = 0; u < W; ++u) {
           const std::size_t i = static_cast<std::size_t>(v) * static_cast<std::size_t>(W) + static_cast<std::size_t>(u);
           const Eigen::Vector3f& p = cloud.points[i];

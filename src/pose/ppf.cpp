@@ -191,7 +191,7 @@ PpfTable make_ppf_table(std::span<const Eigen::Vector3f> points, std::span<const
   FirstException failed;
 #pragma omp parallel for schedule(dynamic, 16)
   for (std::ptrdiff_t pi = 0; pi < static_cast<std::ptrdiff_t>(n); ++pi) {
-    failed.run([&] {
+    failed.run(pi, [&] {
       const auto i = static_cast<std::size_t>(pi);
       Pairs& out = by_point[i];
       const Transform T_local_model = local_frame(t.sampled.points[i], t.sampled.normals[i]);
@@ -321,8 +321,9 @@ std::vector<PpfHypothesis> PpfModel::hypotheses(const OrientedPoints& scene) con
 #pragma omp parallel
   {
     std::vector<std::uint32_t> votes, touched, neighbours;
-    // (A thread that cannot have its buffers runs no iteration: failed.run skips them all.)
-    failed.run([&] {
+    // (A thread that cannot have its buffers runs no iteration: as index -1, below every
+    // iteration's, its failure makes failed.run skip them all.)
+    failed.run(-1, [&] {
       votes.assign(model_points * static_cast<std::size_t>(bins), 0);
       // The slots voted for, each once: written on every vote and counted on a slot's first, without
       // a branch the processor would mispredict half the time (one more, for the write after all).
@@ -331,7 +332,7 @@ std::vector<PpfHypothesis> PpfModel::hypotheses(const OrientedPoints& scene) con
     std::size_t n_touched = 0;
 #pragma omp for schedule(dynamic, 16)
     for (std::ptrdiff_t r = 0; r < static_cast<std::ptrdiff_t>(references); ++r) {
-      failed.run([&] {
+      failed.run(r, [&] {
         const std::size_t s1 = static_cast<std::size_t>(r) * stride;
         const Eigen::Vector3f& p1 = scene.points[s1];
         const Eigen::Vector3f& n1 = scene.normals[s1];

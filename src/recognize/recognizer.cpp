@@ -45,10 +45,10 @@ void for_each_index(std::ptrdiff_t n, bool parallel, std::ptrdiff_t grain, const
     // (Unsigned: clang compares the loop's bound with its own unsigned count of iterations.)
     const auto count = static_cast<std::size_t>(n), chunk = static_cast<std::size_t>(grain);
 #pragma omp taskloop grainsize(chunk) shared(body, failed)
-    for (std::size_t i = 0; i < count; ++i) failed.run([&] { body(static_cast<std::ptrdiff_t>(i)); });
+    for (std::size_t i = 0; i < count; ++i) failed.run(static_cast<std::ptrdiff_t>(i), [&] { body(static_cast<std::ptrdiff_t>(i)); });
   } else {
 #pragma omp parallel for schedule(dynamic, grain)
-    for (std::ptrdiff_t i = 0; i < n; ++i) failed.run([&] { body(i); });
+    for (std::ptrdiff_t i = 0; i < n; ++i) failed.run(i, [&] { body(i); });
   }
   failed.rethrow();
 }
@@ -88,7 +88,7 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
       const auto objects = static_cast<std::ptrdiff_t>(db.objects.size());
       FirstException failed;
 #pragma omp parallel for schedule(dynamic, 1)
-      for (std::ptrdiff_t o = 0; o < objects; ++o) failed.run([&] { prepare(static_cast<std::uint32_t>(o)); });
+      for (std::ptrdiff_t o = 0; o < objects; ++o) failed.run(o, [&] { prepare(static_cast<std::uint32_t>(o)); });
       failed.rethrow();
     };
     each_object([&](std::uint32_t o) { icp_target(o).grid(options_.icp.grid_cell_m, options_.icp.reach_m()); });
@@ -218,7 +218,7 @@ Recognition Recognizer::recognize(const Frame& frame) const {
 #pragma omp single
     for (const std::size_t c : order) {
 #pragma omp task firstprivate(c) shared(parts, seg, frame, start, failed)
-      failed.run([&] {
+      failed.run(static_cast<std::ptrdiff_t>(c), [&] {
         Recognition& part = parts[c];
         part.started = start;
         if (!out_of_time(part)) recognize_region(cluster_points(seg.points, seg.clusters[c]), frame, part, 0);

@@ -190,7 +190,7 @@ std::vector<RenderedFrame> render_views(const TriangleMesh& mesh, std::span<cons
   FirstException failed;
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t i = 0; i < T_camera_object.size(); ++i) {
-    failed.run([&] {
+    failed.run(static_cast<std::ptrdiff_t>(i), [&] {
       const MeshInstance instance{&mesh, T_camera_object[i]};
       frames[i] = render(std::span(&instance, 1), K, options);
     });

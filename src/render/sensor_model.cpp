@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "viewpose/core/threads.hpp"
 #include "viewpose/core/error.hpp"
 
 namespace viewpose {
@@ -49,37 +50,50 @@ std::size_t index(const CameraIntrinsics& K, int u, int v) {
 // projector columns u_p = u - fx * b / z.
 void cast_shadows(DepthImage& depth, const CameraIntrinsics& K, double baseline) {
   const int W = K.width;
-  std::vector<float> zbuf(static_cast<std::size_t>(W));
-  std::vector<double> up(static_cast<std::size_t>(W));
-#pragma omp parallel for firstprivate(zbuf, up)
-  for (int v = 0; v < K.height; ++v) {
-    std::fill(zbuf.begin(), zbuf.end(), std::numeric_limits<float>::infinity());
-    const auto put = [&](int col, float z) {
-      if (col >= 0 && col < W) zbuf[static_cast<std::size_t>(col)] = std::min(zbuf[static_cast<std::size_t>(col)], z);
-    };
-    for (int u = 0; u < W; ++u) {
-      const float z = depth.at(u, v);
-      up[static_cast<std::size_t>(u)] = std::isfinite(z) ? u - K.fx * baseline / z : NAN;
-      if (std::isfinite(z)) put(static_cast<int>(std::lround(up[static_cast<std::size_t>(u)])), z);
-    }
-    // Fill the projector columns between neighbouring pixels of one surface, so that a near
-    // surface's shadow has no gaps.
-    for (int u = 0; u + 1 < W; ++u) {
-      const float za = depth.at(u, v), zb = depth.at(u + 1, v);
-      if (!std::isfinite(za) || !std::isfinite(zb) || std::abs(za - zb) > 0.02f * std::min(za, zb) + 0.005f) continue;
-      const double ua = up[static_cast<std::size_t>(u)], ub = up[static_cast<std::size_t>(u) + 1];
-      for (int c = static_cast<int>(std::ceil(std::min(ua, ub))); c <= static_cast<int>(std::floor(std::max(ua, ub))); ++c) {
-        const double t = ub == ua ? 0.0 : (c - ua) / (ub - ua);
-        put(c, static_cast<float>(za + t * (zb - za)));
-      }
-    }
-    for (int u = 0; u < W; ++u) {
-      float& z = depth.at(u, v);
-      if (!std::isfinite(z)) continue;
-      const int c = static_cast<int>(std::lround(up[static_cast<std::size_t>(u)]));
-      if (c >= 0 && c < W && z > zbuf[static_cast<std::size_t>(c)] + 0.01f * z + 0.005f) z = kNaN;
+  FirstException failed;
+#pragma omp parallel
+  {
+    // Each thread's rows of the projector's view (allocated in failed.run: a thread without them
+    // runs no row).
+    std::vector<float> zbuf;
+    std::vector<double> up;
+    failed.run(-1, [&] {
+      zbuf.resize(static_cast<std::size_t>(W));
+      up.resize(static_cast<std::size_t>(W));
+    });
+#pragma omp for
+    for (int v = 0; v < K.height; ++v) {
+      failed.run(v, [&] {
+        std::fill(zbuf.begin(), zbuf.end(), std::numeric_limits<float>::infinity());
+        const auto put = [&](int col, float z) {
+          if (col >= 0 && col < W) zbuf[static_cast<std::size_t>(col)] = std::min(zbuf[static_cast<std::size_t>(col)], z);
+        };
+        for (int u = 0; u < W; ++u) {
+          const float z = depth.at(u, v);
+          up[static_cast<std::size_t>(u)] = std::isfinite(z) ? u - K.fx * baseline / z : NAN;
+          if (std::isfinite(z)) put(static_cast<int>(std::lround(up[static_cast<std::size_t>(u)])), z);
+        }
+        // Fill the projector columns between neighbouring pixels of one surface, so that a near
+        // surface's shadow has no gaps.
+        for (int u = 0; u + 1 < W; ++u) {
+          const float za = depth.at(u, v), zb = depth.at(u + 1, v);
+          if (!std::isfinite(za) || !std::isfinite(zb) || std::abs(za - zb) > 0.02f * std::min(za, zb) + 0.005f) continue;
+          const double ua = up[static_cast<std::size_t>(u)], ub = up[static_cast<std::size_t>(u) + 1];
+          for (int c = static_cast<int>(std::ceil(std::min(ua, ub))); c <= static_cast<int>(std::floor(std::max(ua, ub))); ++c) {
+            const double t = ub == ua ? 0.0 : (c - ua) / (ub - ua);
+            put(c, static_cast<float>(za + t * (zb - za)));
+          }
+        }
+        for (int u = 0; u < W; ++u) {
+          float& z = depth.at(u, v);
+          if (!std::isfinite(z)) continue;
+          const int c = static_cast<int>(std::lround(up[static_cast<std::size_t>(u)]));
+          if (c >= 0 && c < W && z > zbuf[static_cast<std::size_t>(c)] + 0.01f * z + 0.005f) z = kNaN;
+        }
+      });
     }
   }
+  failed.rethrow();
 }
 
 }  // namespace

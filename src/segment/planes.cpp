@@ -246,7 +246,7 @@ PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o)
   FirstException failed;
 #pragma omp parallel for schedule(static, 1) num_threads(chunks)
   for (int chunk = 0; chunk < chunks; ++chunk) {
-    failed.run([&] {
+    failed.run(chunk, [&] {
       auto& lists = found[static_cast<std::size_t>(chunk)];  // one per plane, then the remaining points
       const std::size_t begin = cloud.size() * static_cast<std::size_t>(chunk) / static_cast<std::size_t>(chunks),
                         end = cloud.size() * static_cast<std::size_t>(chunk + 1) / static_cast<std::size_t>(chunks);

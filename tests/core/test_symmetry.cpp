@@ -1,4 +1,5 @@
 // Symmetries found on shapes whose symmetries are known by construction, and canonical poses.
+#include <cmath>
 #include <numbers>
 
 #include <Eigen/Geometry>
@@ -61,6 +62,14 @@ TEST(Symmetry, AJugAndAMugWithHandlesHaveNone) {
 TEST(Symmetry, ASphereTurnsEveryWay) {
   const Symmetries s = find_symmetries(make_sphere(0.05, 30));
   EXPECT_EQ(s.continuous.size(), 3u);
+  // Any pose of it is reported as the reference: x along the camera's x, z up and toward the
+  // camera, turned about its centre (which stays where it was).
+  const Transform T = turn({1, 2, 0.5}, 70, {0.1, -0.05, 0.9});
+  const Transform c = canonical_pose(T, s);
+  const double h = std::sqrt(0.5);
+  EXPECT_LT((c.linear().col(0) - Eigen::Vector3d(1, 0, 0)).norm(), 1e-9);
+  EXPECT_LT((c.linear().col(2) - Eigen::Vector3d(0, -h, -h)).norm(), 1e-9);
+  EXPECT_LT((c * s.continuous[0].offset_m - T * s.continuous[0].offset_m).norm(), 1e-9);
 }
 
 TEST(Symmetry, EquivalentPosesGiveTheSameCanonicalPose) {

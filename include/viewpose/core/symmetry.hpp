@@ -45,7 +45,8 @@ std::vector<Transform> symmetry_transforms(const Symmetries& symmetries, int con
 
 /// Among the poses T_camera_object * S that the symmetries make equivalent, the one whose rotation is
 /// nearest a fixed reference: the same answer for every equivalent input. The reference stands the
-/// object as it was modelled, its z up, for a camera looking anywhere from level to straight down:
+/// object as it was modelled, its z up, for a camera looking anywhere from level to straight down
+/// without roll (a box's z within 70 degrees of the reference's, a can's within 90, come back up):
 /// object z toward (0, -1, -1) / sqrt 2 in the camera frame (up in the image and toward the
 /// camera), object x along the camera's x. CAD models are mostly drawn standing on their base with
 /// z up (YCB-Video's, LineMOD's, T-LESS's), and objects stand so on a table: a can whose ends look

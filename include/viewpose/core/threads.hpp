@@ -2,7 +2,9 @@
 // How many threads the parallel stages (OpenMP underneath) use, and how their idle threads wait.
 // Results depend on neither.
 #include <atomic>
+#include <cstddef>
 #include <exception>
+#include <limits>
 #include <mutex>
 #include <string>
 
@@ -22,36 +24,39 @@ int thread_count();
 /// "OMP_WAIT_POLICY=passive", or "libgomp's default (spin 300000)".
 std::string openmp_wait();
 
-/// The first exception thrown in the iterations or tasks of a parallel region, kept to be thrown
-/// again once the region is over: an exception may not leave an OpenMP region or task (the process
-/// would end in std::terminate, with nothing a user could act on, rather than a one-line error).
+/// The exception thrown by the lowest-numbered iteration or task of a parallel region that threw,
+/// kept to be thrown again once the region is over: an exception may not leave an OpenMP region or
+/// task (the process would end in std::terminate, with nothing a user could act on, rather than a
+/// one-line error). The lowest index, not the first in time: the same error whatever the threads.
 ///
 ///     FirstException failed;
 ///     #pragma omp parallel for
-///     for (int i = 0; i < n; ++i) failed.run([&] { work(i); });
+///     for (int i = 0; i < n; ++i) failed.run(i, [&] { work(i); });
 ///     failed.rethrow();
 class FirstException {
  public:
-  /// Runs `f`, keeping what it throws if nothing was kept before. Once something has been, runs
-  /// nothing more: the region's results will not be used.
+  /// Runs `f` as the work of `index`, keeping what it throws if no lower index has thrown. Once an
+  /// index has thrown, higher ones run nothing more (the region's results will not be used); lower
+  /// ones still run, so that the lowest that throws is the one kept.
   template <class F>
-  void run(F&& f) noexcept {
-    if (failed_.load(std::memory_order_relaxed)) return;
+  void run(std::ptrdiff_t index, F&& f) noexcept {
+    if (index > failed_index_.load(std::memory_order_relaxed)) return;
     try {
       f();
     } catch (...) {
-      keep(std::current_exception());
+      keep(index, std::current_exception());
     }
   }
-  bool failed() const noexcept { return failed_.load(std::memory_order_relaxed); }
+  bool failed() const noexcept { return failed_index_.load(std::memory_order_relaxed) != kNone; }
   /// Throws the exception kept, if any. Called after the region (its threads joined).
   void rethrow();
 
  private:
-  void keep(std::exception_ptr e) noexcept;
+  static constexpr std::ptrdiff_t kNone = std::numeric_limits<std::ptrdiff_t>::max();
+  void keep(std::ptrdiff_t index, std::exception_ptr e) noexcept;
   std::mutex mutex_;
   std::exception_ptr first_;
-  std::atomic<bool> failed_{false};
+  std::atomic<std::ptrdiff_t> failed_index_{kNone};
 };
 
 }  // namespace viewpose
