@@ -508,6 +508,7 @@ std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& 
   if (options_.match.source != PoseSource::ppf) region.matches = index_.nearest(d.vfh, options_.match.per_object, options_.match.at_most);
   out.times.match_ms += ms_since(t_match);
   region.icp_source = voxel_downsample(d.cloud, db_.params.icp_voxel_m).points;
+  region.grid = OccupancyGrid(region.icp_source, options_.match.fit_cell_m);
   // Where the sensor's pixels lie farther apart than the ICP copy's voxels, the region holds fewer
   // of them than its surface would: counted as if sampled densely (an upper bound on its surface).
   region.icp_points_dense = static_cast<double>(region.icp_source.size());
@@ -596,17 +597,16 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
       candidates.push_back({static_cast<std::uint32_t>(m), view.object, roll, T_camera_view * view.T_view_object, 0.0});
     }
   }
-  const OccupancyGrid region_grid(region.icp_source, options_.match.fit_cell_m);
   for (Candidate& c : candidates) prepared(c.object);  // (each object once)
   const auto count = static_cast<std::ptrdiff_t>(candidates.size());
   for_each_index(count, options_.run.parallel_hypotheses && count > 64, 32, [&](std::ptrdiff_t k) {
     Candidate& c = candidates[static_cast<std::size_t>(k)];
     const ViewEntry& view = db_.views[region.matches[c.match].view];
-    const CoarseFitInputs in{region.icp_source, &region_grid, view.icp_points, &prepared(c.object).occupancy};
+    const CoarseFitInputs in{region.icp_source, &region.grid, view.icp_points, &prepared(c.object).occupancy};
     c.fit = coarse_fit(in, c.T_camera_object * view.T_view_object.inverse(), c.T_camera_object, options_.match.fit_points);
   });
   if (options_.match.source == PoseSource::ppf) {
-    for (Candidate& c : pair_vote_candidates(region, region_grid)) candidates.push_back(c);
+    for (Candidate& c : pair_vote_candidates(region)) candidates.push_back(c);
   }
   // Best fit first; equal fits keep the order of the views' VFH distance and their rolls' peaks.
   std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.fit > b.fit; });
@@ -615,7 +615,7 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
   return candidates;
 }
 
-std::vector<Recognizer::Candidate> Recognizer::pair_vote_candidates(const Region& region, const OccupancyGrid& region_grid) const {
+std::vector<Recognizer::Candidate> Recognizer::pair_vote_candidates(const Region& region) const {
   const Description& d = region.description;
   const auto objects = static_cast<std::ptrdiff_t>(db_.objects.size());
   std::vector<std::vector<Candidate>> by_object(db_.objects.size());
@@ -632,7 +632,7 @@ std::vector<Recognizer::Candidate> Recognizer::pair_vote_candidates(const Region
     // The region sampled as the object's table was, at its own step (a share of its diameter).
     const OrientedPoints scene = ppf_sample(d.cloud.points, d.cloud.normals, table.sample_step_m(), table.normal_split_deg());
     for (const PpfHypothesis& h : table.hypotheses(scene)) {
-      const double fit = coarse_fit_facing(region.icp_source, region_grid, table.sampled().points, table.sampled().normals,
+      const double fit = coarse_fit_facing(region.icp_source, region.grid, table.sampled().points, table.sampled().normals,
                                            prepared(o).occupancy, h.T_camera_object, options_.match.fit_points);
       by_object[o].push_back({Candidate::kFromPairVotes, o, 0.0f, h.T_camera_object, fit});
     }
@@ -794,7 +794,7 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
     if (source == 1) {
       const auto t = Clock::now();
       for (Region& region : regions) {
-        region.candidates = pair_vote_candidates(region, OccupancyGrid(region.icp_source, options_.match.fit_cell_m));
+        region.candidates = pair_vote_candidates(region);
         region.screened_poses.clear();
         std::stable_sort(region.candidates.begin(), region.candidates.end(), [](const Candidate& x, const Candidate& y) { return x.fit > y.fit; });
         interleave_by_object(region.candidates.begin(), region.candidates.end());

@@ -4,6 +4,8 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <string>
+#include <thread>
 #include <numbers>
 
 #include "test_support.hpp"
@@ -213,6 +215,47 @@ TEST(Recognize, ClustersSearchedSideBySideGiveWhatOneAfterAnotherGives) {
   }
   EXPECT_GT(clusters, 2 * frames) << "frames of several clusters";
   EXPECT_GT(detections, 0u);
+}
+
+TEST(Recognize, OneRecognizerCalledFromTheCallersThreadsAtOnceGivesWhatEachFrameGivesAlone) {
+  // A robot's program recognizes frames of several cameras at once with one recognizer: from its
+  // own OpenMP loop (our regions then run nested inside its threads) or from threads of its own.
+  // Each call must give what the frame gives alone, whatever runs beside it; the recognizers are
+  // new, so their objects are first prepared by calls racing each other.
+  const std::vector<Frame> frames = room_frames();
+  ASSERT_GE(frames.size(), 2u);
+  std::vector<Recognition> alone;
+  {
+    const Recognizer recognizer(room_db());
+    for (const Frame& frame : frames) alone.push_back(recognizer.recognize(frame));
+  }
+  std::size_t detections = 0;
+  for (const Recognition& r : alone) detections += r.detections.size();
+  EXPECT_GT(detections, 0u);
+  const auto n = static_cast<std::ptrdiff_t>(frames.size());
+  {
+    const Recognizer recognizer(room_db());
+    std::vector<Recognition> in_loop(frames.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(2)
+    for (std::ptrdiff_t k = 0; k < n; ++k) in_loop[static_cast<std::size_t>(k)] = recognizer.recognize(frames[static_cast<std::size_t>(k)]);
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      SCOPED_TRACE("caller's OpenMP loop, frame " + std::to_string(k));
+      expect_same_recognition(alone[k], in_loop[k]);
+    }
+  }
+  {
+    const Recognizer recognizer(room_db());
+    std::vector<Recognition> on_threads(frames.size());
+    std::vector<std::thread> threads;
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      threads.emplace_back([&, k] { on_threads[k] = recognizer.recognize(frames[k]); });
+    }
+    for (std::thread& t : threads) t.join();
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      SCOPED_TRACE("caller's std::thread, frame " + std::to_string(k));
+      expect_same_recognition(alone[k], on_threads[k]);
+    }
+  }
 }
 
 TEST(Recognize, WhatTheDatabaseStoresPreparedGivesWhatTheRecognizerWouldPrepare) {

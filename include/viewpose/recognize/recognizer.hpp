@@ -366,6 +366,7 @@ class Recognizer {
     std::vector<Match> matches;
     std::vector<Candidate> candidates;
     std::vector<Eigen::Vector3f> icp_source;
+    OccupancyGrid grid;  // icp_source's occupied cells (MatchOptions::fit_cell_m): each starting pose's coarse fit
     double icp_points_dense = 0;  // icp_source's count, as if the sensor sampled it at least every 5 mm
     double smallest_diameter = 0;  // objects narrower than this cannot explain the region
     VerifyOptions verify;
@@ -403,7 +404,7 @@ class Recognizer {
   std::vector<Candidate> rank_candidates(const Region& region, Recognition& out) const;
   // Each object's point pair vote poses for the region, with their coarse fit (the model's points
   // that face the camera standing in for a view's), object by object.
-  std::vector<Candidate> pair_vote_candidates(const Region& region, const OccupancyGrid& region_grid) const;
+  std::vector<Candidate> pair_vote_candidates(const Region& region) const;
   // The MatchOptions::prescreen starting poses from `from` on (best coarse fit first) refined by a
   // short ICP and put in the order of where it brought them (Candidate::priority), best first.
   void prescreen(Region& region, std::size_t from, Recognition& out) const;
