@@ -191,16 +191,26 @@ std::vector<Transform> symmetry_transforms(const Symmetries& s, int continuous_s
 }
 
 Transform canonical_pose(const Transform& T, const Symmetries& s) {
-  if (s.empty()) return T;
-  // The reference the pose's rotation is brought nearest (canonical_pose's doc says why): the
-  // object's x on the camera's x, its z up-and-toward the camera, half way between the image's up
-  // (-y) and the camera (-z), its y completing the frame. In the maths below R is the rotation
-  // relative to it, R_ref^T R_camera_object.
+  // (canonical_pose's doc says why this reference: up in the image and toward the camera.)
   const double h = std::sqrt(0.5);
+  return canonical_pose(T, s, Eigen::Vector3d(0, -h, -h));
+}
+
+Transform canonical_pose(const Transform& T, const Symmetries& s, const Eigen::Vector3d& up_camera) {
+  if (s.empty()) return T;
+  // The reference the pose's rotation is brought nearest: the object's z on `up_camera`, its x on
+  // the camera's x made square to it (the camera's y where x is nearly along up: a camera rolled a
+  // quarter turn), its y completing the frame. In the maths below R is the rotation relative to
+  // it, R_ref^T R_camera_object.
+  // (A unit vector as given: the fixed reference's, exactly as it always was.)
+  const Eigen::Vector3d z = std::abs(up_camera.squaredNorm() - 1) < 1e-12 ? up_camera : up_camera.normalized();
+  Eigen::Vector3d x = Eigen::Vector3d::UnitX() - z.x() * z;
+  if (x.norm() < 0.5) x = Eigen::Vector3d::UnitY() - z.y() * z;
+  x.normalize();
   Eigen::Matrix3d R_ref;
-  R_ref << 1, 0, 0,
-           0, -h, -h,
-           0, h, -h;
+  R_ref.col(0) = x;
+  R_ref.col(1) = z.cross(x);
+  R_ref.col(2) = z;
   const Eigen::Matrix3d R = R_ref.transpose() * T.linear();
   if (s.continuous.size() >= 2) {
     // Any rotation about the centre: the one that leaves the object's axes on the reference's.

@@ -18,6 +18,7 @@
 #include "viewpose/database/matching.hpp"
 #include "viewpose/pose/coarse_fit.hpp"
 #include "viewpose/pose/confidence.hpp"
+#include "viewpose/pose/resting_plane.hpp"
 #include "viewpose/core/threads.hpp"
 #include "viewpose/recognize/candidate_order.hpp"
 #include "viewpose/render/simplify.hpp"
@@ -228,8 +229,25 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     for (Recognition& part : parts) merge_part(std::move(part), out);
   }
   if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
+  if (options_.accept.canonical_poses && !seg.planes.empty()) stand_on_resting_planes(seg.planes, out);
   out.times.total_ms = ms_since(start);
   return out;
+}
+
+void Recognizer::stand_on_resting_planes(std::span<const Plane> planes, Recognition& out) const {
+  std::vector<Eigen::Vector4f> coefficients;
+  for (const Plane& plane : planes) coefficients.push_back(plane.coefficients);
+  for (Detection& d : out.detections) {
+    const DatabaseObject& object = db_.objects[d.object_index];
+    if (object.symmetries.empty()) continue;
+    // Touching within the plane's own inlier band (its surface as measured) and what verification
+    // tolerates of the pose at the object's depth.
+    const float touch_m = options_.segment.planes.distance_threshold_m +
+                          depth_tolerance(static_cast<float>(d.T_camera_object.translation().z()), options_.verify);
+    if (const std::optional<Eigen::Vector3d> up = resting_plane_up(coefficients, object.model_points, d.T_camera_object, touch_m)) {
+      d.T_camera_object = canonical_pose(d.T_camera_object, object.symmetries, *up);
+    }
+  }
 }
 
 void Recognizer::merge_part(Recognition&& part, Recognition& out) {

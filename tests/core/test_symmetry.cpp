@@ -1,6 +1,7 @@
 // Symmetries found on shapes whose symmetries are known by construction, and canonical poses.
 #include <cmath>
 #include <numbers>
+#include <string>
 
 #include <Eigen/Geometry>
 
@@ -119,6 +120,50 @@ TEST(Symmetry, ObjectsStandingAsModelledAreReportedUprightForAnyCameraTilt) {
         EXPECT_GT(c.linear().col(2).dot(up_in_camera), 0.999) << name << ", camera " << tilt_deg << " degrees down, yaw " << yaw_deg;
       }
     }
+  }
+}
+
+TEST(Symmetry, GivenTheScenesUpObjectsAreReportedUprightForAnyCameraRollOrTilt) {
+  // The same with the up the scene gives (the table's normal in the camera frame): a camera rolled
+  // a quarter turn, half a turn (upside down: the fixed reference then stands them on their heads)
+  // and three quarters, looking down or up. The canonical pose stands each up along it.
+  const TriangleMesh can = make_can(), box = make_box_mesh({0.06f, 0.095f, 0.2f});
+  const Symmetries can_s = find_symmetries(can), box_s = find_symmetries(box);
+  std::size_t upside_down_by_fixed_reference = 0;
+  for (const double tilt_deg : {-30.0, 0.0, 45.0, 90.0}) {
+    for (const double roll_deg : {0.0, 90.0, 180.0, 270.0, 33.0}) {
+      const double t = tilt_deg * std::numbers::pi / 180.0;
+      Eigen::Matrix3d R_world_camera;
+      R_world_camera.col(0) = Eigen::Vector3d::UnitX();
+      R_world_camera.col(1) = Eigen::Vector3d(0, -std::sin(t), -std::cos(t));
+      R_world_camera.col(2) = Eigen::Vector3d(0, std::cos(t), -std::sin(t));
+      R_world_camera = R_world_camera * turn({0, 0, 1}, roll_deg).linear();  // rolled about its own z
+      const Eigen::Vector3d up_in_camera = R_world_camera.transpose() * Eigen::Vector3d::UnitZ();
+      for (const double yaw_deg : {0.0, 50.0, 140.0, 235.0}) {
+        const Eigen::Matrix3d R_world_object = Eigen::AngleAxisd(yaw_deg * std::numbers::pi / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        const Transform upright = make_transform(R_world_camera.transpose() * R_world_object, {0.02, 0.05, 0.8});
+        for (const Transform& given : {upright, upright * turn({1, 0, 0}, 180), upright * turn({0, 1, 0}, 180)}) {
+          for (const auto& [name, s] : {std::pair{"can", &can_s}, std::pair{"box", &box_s}}) {
+            const Transform c = canonical_pose(given, *s, up_in_camera);
+            EXPECT_GT(c.linear().col(2).dot(up_in_camera), 0.999) << name << ", tilt " << tilt_deg << ", roll " << roll_deg << ", yaw " << yaw_deg;
+            // Still one of the given pose's equivalents: the same surface.
+            EXPECT_LT(worst_displacement(name == std::string("can") ? can : box, given.inverse() * c), 0.002) << name;
+            upside_down_by_fixed_reference += canonical_pose(given, *s).linear().col(2).dot(up_in_camera) < 0 ? 1 : 0;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(upside_down_by_fixed_reference, 50u) << "the fixed reference alone fails these cameras";
+}
+
+TEST(Symmetry, TheDefaultUpGivesTheFixedReferencesPoseBitForBit) {
+  const TriangleMesh can = make_can();
+  const Symmetries s = find_symmetries(can);
+  const double h = std::sqrt(0.5);
+  for (const double deg : {0.0, 37.0, 121.0, 250.0}) {
+    const Transform T = make_transform(Eigen::AngleAxisd(deg * std::numbers::pi / 180.0, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix(), {0.1, -0.05, 0.9});
+    EXPECT_TRUE(canonical_pose(T, s).matrix() == canonical_pose(T, s, Eigen::Vector3d(0, -h, -h)).matrix()) << deg;
   }
 }
 

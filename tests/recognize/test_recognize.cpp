@@ -730,6 +730,39 @@ TEST(Recognize, ACanTurnedAboutItsAxisGivesTheSamePose) {
   }
 }
 
+TEST(Recognize, ACanIsReportedStandingOnItsTableByACameraUpsideDown) {
+  // A can is alike end for end: which end is up comes from the table it stands on, not from the
+  // camera's axes. Seen by the camera held upright and then rolled half a turn (the image turned
+  // about its centre, as a wrist camera sees it), it is reported standing up both times; the
+  // camera's own default up alone would stand it on its head in the second.
+  const ViewDatabase& db = jug_and_can_db();
+  const Symmetries& symmetries = db.objects[1].symmetries;
+  ASSERT_FALSE(symmetries.empty());
+  const JugAndCan scene = jug_and_can_scene();
+  const Transform can_pose = scene.can_at(0.0);
+  const SimulatedFrame f = simulate_image(scene.ds, SimImage{{{1, can_pose}}}, SensorModel::kinect_v1(), 9);
+  ASSERT_DOUBLE_EQ(K.cx, (K.width - 1) / 2.0);  // the turned image keeps the intrinsics
+  ASSERT_DOUBLE_EQ(K.cy, (K.height - 1) / 2.0);
+  DepthImage turned(f.depth.width, f.depth.height);
+  for (int v = 0; v < f.depth.height; ++v)
+    for (int u = 0; u < f.depth.width; ++u) turned.at(f.depth.width - 1 - u, f.depth.height - 1 - v) = f.depth.at(u, v);
+  const Transform T_rolled_camera = make_transform(Eigen::Vector3d(-1, -1, 1).asDiagonal().toDenseMatrix(), Eigen::Vector3d::Zero());
+  std::size_t fixed_reference_upside_down = 0;
+  for (const bool rolled : {false, true}) {
+    SCOPED_TRACE(rolled ? "camera rolled half a turn" : "camera upright");
+    const Transform truth = rolled ? T_rolled_camera * can_pose : can_pose;
+    const Recognition r = Recognizer(db).recognize(frame_from_depth(rolled ? turned : f.depth, K));
+    ASSERT_EQ(r.detections.size(), 1u);
+    const Detection& d = r.detections[0];
+    EXPECT_EQ(d.object_id, 2);
+    EXPECT_LT(add_s_error(d.T_camera_object, truth, make_can().vertices), 0.1 * db.objects[1].diameter_m);
+    const Eigen::Vector3d up = truth.linear().col(2);  // the can stands on the table, z up
+    EXPECT_GT(d.T_camera_object.linear().col(2).dot(up), 0.95);
+    fixed_reference_upside_down += canonical_pose(d.T_camera_object, symmetries).linear().col(2).dot(up) < 0 ? 1 : 0;
+  }
+  EXPECT_EQ(fixed_reference_upside_down, 1u) << "the camera's default up fails the rolled camera alone";
+}
+
 TEST(Frame, IntrinsicsAreRecoveredFromAnOrganizedCloud) {
   const CameraIntrinsics truth{570.3, 565.1, 321.7, 236.2, 640, 480};
   DepthImage d(640, 480);

@@ -53,7 +53,15 @@ std::vector<Transform> symmetry_transforms(const Symmetries& symmetries, int con
 /// alike is then reported upright, as it stands, not upside down. (The camera's own axes, the
 /// reference before, put the object's z along the viewing direction, pointing down into a table
 /// seen from above: real YCB-Video frames, AR 0.495 -> 0.511; the can upright, 180 -> 20 degrees
-/// off the truth about its axis.) What depth cannot see (a printed front) stays a coin flip.
+/// off the truth about its axis.) What depth cannot see (a printed front) stays a coin flip. The
+/// recognizer then takes the up from the plane the object rests on where there is one (below).
 Transform canonical_pose(const Transform& T_camera_object, const Symmetries& symmetries);
+
+/// The same with the scene's own up, a unit vector in the camera frame (the normal of the plane the
+/// object rests on, resting_plane_up): the reference is object z along `up_camera` and object x
+/// along the camera's x as far as it is square to it (else the camera's y). This stands an object
+/// as modelled for any camera, rolled (a wrist camera) or looking up; with up_camera (0, -1, -1) /
+/// sqrt 2 it is the fixed reference above.
+Transform canonical_pose(const Transform& T_camera_object, const Symmetries& symmetries, const Eigen::Vector3d& up_camera);
 
 }  // namespace viewpose
