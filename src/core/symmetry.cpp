@@ -190,27 +190,12 @@ std::vector<Transform> symmetry_transforms(const Symmetries& s, int continuous_s
   return out;
 }
 
-Transform canonical_pose(const Transform& T, const Symmetries& s) {
-  // (canonical_pose's doc says why this reference: up in the image and toward the camera.)
-  const double h = std::sqrt(0.5);
-  return canonical_pose(T, s, Eigen::Vector3d(0, -h, -h));
-}
+namespace {
 
-Transform canonical_pose(const Transform& T, const Symmetries& s, const Eigen::Vector3d& up_camera) {
+// Among the poses T * S the symmetries make equivalent, the one whose rotation is nearest R_ref.
+Transform nearest_equivalent(const Transform& T, const Symmetries& s, const Eigen::Matrix3d& R_ref) {
   if (s.empty()) return T;
-  // The reference the pose's rotation is brought nearest: the object's z on `up_camera`, its x on
-  // the camera's x made square to it (the camera's y where x is nearly along up: a camera rolled a
-  // quarter turn), its y completing the frame. In the maths below R is the rotation relative to
-  // it, R_ref^T R_camera_object.
-  // (A unit vector as given: the fixed reference's, exactly as it always was.)
-  const Eigen::Vector3d z = std::abs(up_camera.squaredNorm() - 1) < 1e-12 ? up_camera : up_camera.normalized();
-  Eigen::Vector3d x = Eigen::Vector3d::UnitX() - z.x() * z;
-  if (x.norm() < 0.5) x = Eigen::Vector3d::UnitY() - z.y() * z;
-  x.normalize();
-  Eigen::Matrix3d R_ref;
-  R_ref.col(0) = x;
-  R_ref.col(1) = z.cross(x);
-  R_ref.col(2) = z;
+  // In the maths below R is the rotation relative to the reference, R_ref^T R_camera_object.
   const Eigen::Matrix3d R = R_ref.transpose() * T.linear();
   if (s.continuous.size() >= 2) {
     // Any rotation about the centre: the one that leaves the object's axes on the reference's.
@@ -241,6 +226,39 @@ Transform canonical_pose(const Transform& T, const Symmetries& s, const Eigen::V
     }
   }
   return best;
+}
+
+}  // namespace
+
+Transform canonical_pose(const Transform& T, const Symmetries& s) {
+  // The object's x on the camera's x, its z up-and-toward the camera, half way between the
+  // image's up (-y) and the camera (-z), its y completing the frame (canonical_pose's doc says why).
+  const double h = std::sqrt(0.5);
+  Eigen::Matrix3d R_ref;
+  R_ref << 1, 0, 0,
+           0, -h, -h,
+           0, h, -h;
+  return nearest_equivalent(T, s, R_ref);
+}
+
+Transform canonical_pose(const Transform& T, const Symmetries& s, const Eigen::Vector3d& up_camera) {
+  if (!(up_camera.allFinite() && up_camera.norm() > 1e-6)) return canonical_pose(T, s);
+  // The object's z on `up_camera`; its x on the horizontal heading of the camera's view (the
+  // viewing direction made square to up, turned a quarter about up), which no roll of the camera
+  // changes: a rolled camera sees the same pose. For a camera not rolled that is its own x, as in
+  // the fixed reference. Looking (nearly) along up, where the view has no heading, the camera's x
+  // made square to up.
+  const Eigen::Vector3d z = up_camera.normalized();
+  const Eigen::Vector3d level_view = Eigen::Vector3d::UnitZ() - z.z() * z;
+  Eigen::Vector3d x = level_view.cross(z);
+  if (level_view.norm() < 0.2) x = Eigen::Vector3d::UnitX() - z.x() * z;
+  if (x.norm() < 1e-6) x = Eigen::Vector3d::UnitY() - z.y() * z;
+  x.normalize();
+  Eigen::Matrix3d R_ref;
+  R_ref.col(0) = x;
+  R_ref.col(1) = z.cross(x);
+  R_ref.col(2) = z;
+  return nearest_equivalent(T, s, R_ref);
 }
 
 }  // namespace viewpose

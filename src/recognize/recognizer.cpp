@@ -228,8 +228,9 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     failed.rethrow();
     for (Recognition& part : parts) merge_part(std::move(part), out);
   }
-  if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
+  // (Before the claims: they are judged at the poses reported.)
   if (options_.accept.canonical_poses && !seg.planes.empty()) stand_on_resting_planes(seg.planes, out);
+  if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
   out.times.total_ms = ms_since(start);
   return out;
 }
@@ -244,7 +245,10 @@ void Recognizer::stand_on_resting_planes(std::span<const Plane> planes, Recognit
     // tolerates of the pose at the object's depth.
     const float touch_m = options_.segment.planes.distance_threshold_m +
                           depth_tolerance(static_cast<float>(d.T_camera_object.translation().z()), options_.verify);
-    if (const std::optional<Eigen::Vector3d> up = resting_plane_up(coefficients, object.model_points, d.T_camera_object, touch_m)) {
+    // Its z, and where its symmetries turn z elsewhere (a cube's), those too.
+    std::vector<Eigen::Vector3d> standing_axes = {Eigen::Vector3d::UnitZ()};
+    for (const Transform& S : object.symmetries.discrete) standing_axes.push_back(S.linear().col(2));
+    if (const std::optional<Eigen::Vector3d> up = resting_plane_up(coefficients, object.model_points, d.T_camera_object, standing_axes, touch_m)) {
       d.T_camera_object = canonical_pose(d.T_camera_object, object.symmetries, *up);
     }
   }

@@ -139,12 +139,16 @@ TEST(Symmetry, GivenTheScenesUpObjectsAreReportedUprightForAnyCameraRollOrTilt) 
       R_world_camera.col(2) = Eigen::Vector3d(0, std::cos(t), -std::sin(t));
       R_world_camera = R_world_camera * turn({0, 0, 1}, roll_deg).linear();  // rolled about its own z
       const Eigen::Vector3d up_in_camera = R_world_camera.transpose() * Eigen::Vector3d::UnitZ();
-      for (const double yaw_deg : {0.0, 50.0, 140.0, 235.0}) {
+      // (Not 0: a box square to the heading, the camera straight down and rolled a quarter turn, is a
+      // tie between its half turns, which either answer meets.)
+      for (const double yaw_deg : {10.0, 50.0, 140.0, 235.0}) {
         const Eigen::Matrix3d R_world_object = Eigen::AngleAxisd(yaw_deg * std::numbers::pi / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
         const Transform upright = make_transform(R_world_camera.transpose() * R_world_object, {0.02, 0.05, 0.8});
         for (const Transform& given : {upright, upright * turn({1, 0, 0}, 180), upright * turn({0, 1, 0}, 180)}) {
           for (const auto& [name, s] : {std::pair{"can", &can_s}, std::pair{"box", &box_s}}) {
             const Transform c = canonical_pose(given, *s, up_in_camera);
+            // Every equivalent pose gives the same one.
+            EXPECT_LT(rotation_difference_deg(c.linear(), canonical_pose(upright, *s, up_in_camera).linear()), 0.01) << name << " tilt " << tilt_deg << " roll " << roll_deg << " yaw " << yaw_deg;
             EXPECT_GT(c.linear().col(2).dot(up_in_camera), 0.999) << name << ", tilt " << tilt_deg << ", roll " << roll_deg << ", yaw " << yaw_deg;
             // Still one of the given pose's equivalents: the same surface.
             EXPECT_LT(worst_displacement(name == std::string("can") ? can : box, given.inverse() * c), 0.002) << name;
@@ -155,6 +159,34 @@ TEST(Symmetry, GivenTheScenesUpObjectsAreReportedUprightForAnyCameraRollOrTilt) 
     }
   }
   EXPECT_GT(upside_down_by_fixed_reference, 50u) << "the fixed reference alone fails these cameras";
+}
+
+TEST(Symmetry, RollingTheCameraDoesNotChangeTheCanonicalPoseInTheWorld) {
+  // A can and a box standing still, a camera looking down 40 degrees rolled through a whole turn a
+  // degree at a time: the pose reported, taken back to the world, stays the same (a reference
+  // whose heading followed the camera's own axes would turn it with the roll, or flip it where its
+  // rule switches).
+  const TriangleMesh can = make_can(), box = make_box_mesh({0.06f, 0.095f, 0.2f});
+  const Symmetries can_s = find_symmetries(can), box_s = find_symmetries(box);
+  const double t = 40.0 * std::numbers::pi / 180.0;
+  Eigen::Matrix3d R_world_level;
+  R_world_level.col(0) = Eigen::Vector3d::UnitX();
+  R_world_level.col(1) = Eigen::Vector3d(0, -std::sin(t), -std::cos(t));
+  R_world_level.col(2) = Eigen::Vector3d(0, std::cos(t), -std::sin(t));
+  const Transform T_world_object = make_transform(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix(), {0.1, 0.8, 0.0});
+  const Transform T_world_eye = make_transform(R_world_level, {0.0, 0.0, 0.6});
+  for (const auto& [name, s] : {std::pair{"can", &can_s}, std::pair{"box", &box_s}}) {
+    Transform first = Transform::Identity();
+    for (int roll = 0; roll < 360; ++roll) {
+      const Transform T_world_camera = T_world_eye * turn({0, 0, 1}, roll);
+      const Transform T_camera_object = T_world_camera.inverse() * T_world_object * turn({1, 0, 0}, 180);  // given upside down
+      const Eigen::Vector3d up_in_camera = T_world_camera.linear().transpose() * Eigen::Vector3d::UnitZ();
+      const Transform in_world = T_world_camera * canonical_pose(T_camera_object, *s, up_in_camera);
+      if (roll == 0) first = in_world;
+      EXPECT_LT(rotation_difference_deg(in_world.linear(), first.linear()), 0.01) << name << ", roll " << roll;
+    }
+    EXPECT_GT(first.linear().col(2).z(), 0.999) << name << " standing";
+  }
 }
 
 TEST(Symmetry, TheDefaultUpGivesTheFixedReferencesPoseBitForBit) {

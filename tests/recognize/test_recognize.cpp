@@ -219,7 +219,8 @@ TEST(Recognize, ClustersSearchedSideBySideGiveWhatOneAfterAnotherGives) {
 
 TEST(Recognize, OneRecognizerCalledFromTheCallersThreadsAtOnceGivesWhatEachFrameGivesAlone) {
   // A robot's program recognizes frames of several cameras at once with one recognizer: from its
-  // own OpenMP loop (our regions then run nested inside its threads) or from threads of its own.
+  // own OpenMP loop (our parallel regions then open inside its threads, on one thread each unless
+  // it enables nesting) or from threads of its own.
   // Each call must give what the frame gives alone, whatever runs beside it; the recognizers are
   // new, so their objects are first prepared by calls racing each other.
   const std::vector<Frame> frames = room_frames();

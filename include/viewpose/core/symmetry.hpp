@@ -57,11 +57,13 @@ std::vector<Transform> symmetry_transforms(const Symmetries& symmetries, int con
 /// recognizer then takes the up from the plane the object rests on where there is one (below).
 Transform canonical_pose(const Transform& T_camera_object, const Symmetries& symmetries);
 
-/// The same with the scene's own up, a unit vector in the camera frame (the normal of the plane the
-/// object rests on, resting_plane_up): the reference is object z along `up_camera` and object x
-/// along the camera's x as far as it is square to it (else the camera's y). This stands an object
-/// as modelled for any camera, rolled (a wrist camera) or looking up; with up_camera (0, -1, -1) /
-/// sqrt 2 it is the fixed reference above.
+/// The same with the scene's own up, a vector in the camera frame (the normal of the plane the
+/// object stands on, resting_plane_up): the reference is object z along `up_camera` and object x
+/// along the heading of the camera's view (its viewing direction made square to up, turned a
+/// quarter turn about up; for a camera looking nearly along up, its x made square to up). No roll
+/// of the camera changes that heading, so the pose reported stays put in the world while the
+/// camera rolls; for a camera not rolled it is the fixed reference above. A zero or non-finite
+/// up gives the fixed reference.
 Transform canonical_pose(const Transform& T_camera_object, const Symmetries& symmetries, const Eigen::Vector3d& up_camera);
 
 }  // namespace viewpose

@@ -155,8 +155,8 @@ struct AcceptOptions {
   double near_miss_conflict_fraction = 0.15;
   /// Report a symmetric object's pose in one canonical form among its equivalent ones (canonical_pose:
   /// the object standing as modelled, z up), so that a box or a can does not flip from frame to frame.
-  /// Up is the normal of the removed plane the object rests on (resting_plane_up: a table seen by a
-  /// camera rolled or upside down), else the camera's default up.
+  /// Up is the normal of the removed plane the object stands on (resting_plane_up: a table seen by
+  /// a camera rolled or upside down), else the camera's default up.
   bool canonical_poses = true;
   /// The frame as a whole (pose/scene_claims.hpp): of detections that explain the same pixels,
   /// the more confident is kept; one whose evidence another already explains is dropped.
@@ -486,7 +486,7 @@ class Recognizer {
   bool out_of_time(Recognition& out) const;
   // Drops the detections whose pixels more confident ones already explain (resolve_scene_claims).
   void resolve_scene(const Frame& frame, Recognition& out) const;
-  // Each symmetric object that rests on one of the frame's removed planes reported standing on it
+  // Each symmetric object that stands on one of the frame's removed planes reported standing on it
   // as modelled (canonical_pose with the plane's up; search chose with the camera's default up).
   void stand_on_resting_planes(std::span<const Plane> planes, Recognition& out) const;
   // A cluster's own record (RunOptions::parallel_clusters) added to the frame's: its detections
