@@ -14,6 +14,7 @@
 #include <fmt/ranges.h>
 
 #include "viewpose/core/error.hpp"
+#include "viewpose/core/kdtree.hpp"
 #include "viewpose/core/transform.hpp"
 #include "viewpose/database/matching.hpp"
 #include "viewpose/pose/coarse_fit.hpp"
@@ -23,6 +24,7 @@
 #include "viewpose/recognize/candidate_order.hpp"
 #include "viewpose/render/simplify.hpp"
 #include "viewpose/segment/convex_segments.hpp"
+#include "viewpose/segment/depth_gaps.hpp"
 #include "viewpose/segment/voxel_grid.hpp"
 
 namespace viewpose {
@@ -228,6 +230,7 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     failed.rethrow();
     for (Recognition& part : parts) merge_part(std::move(part), out);
   }
+  if (options_.split.enabled && options_.split.join_gap_m > 0 && !out_of_time(out)) join_fragments(seg, frame, out);
   // (Before the claims: they are judged at the poses reported.)
   if (options_.accept.canonical_poses && !seg.planes.empty()) stand_on_resting_planes(seg.planes, out);
   if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
@@ -264,6 +267,7 @@ void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   out.split_clusters += part.split_clusters;
   out.regions += part.regions;
   out.dropped_as_explained += part.dropped_as_explained;
+  out.joined_regions += part.joined_regions;
   out.cut_short = out.cut_short || part.cut_short;
 }
 
@@ -298,10 +302,7 @@ void Recognizer::resolve_scene(const Frame& frame, Recognition& out) const {
 void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, Recognition& out, int depth) const {
   // Anything found inside a split cluster stands on less evidence than an isolated cluster, and is
   // checked more strictly.
-  VerifyOptions part_verify = options_.verify;
-  part_verify.max_unmeasured_fraction = std::min(part_verify.max_unmeasured_fraction, options_.split.part_max_unmeasured_fraction);
-  part_verify.min_inlier_fraction = std::max(part_verify.min_inlier_fraction, options_.split.part_min_inlier_fraction);
-  part_verify.min_cluster_explained = std::max(part_verify.min_cluster_explained, options_.split.part_min_cluster_explained);
+  const VerifyOptions part_verify = part_verify_options();
   // Verification gives no verdict past its range (VerifyOptions::max_depth_m): a region that lies
   // beyond it is not tried at all, rather than tried against every view to no end.
   if (points.size() > 0) {
@@ -357,6 +358,133 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
   }
   det->from_split_cluster = true;
   recognize_rest(points, std::move(*det), frame, out, depth);
+}
+
+VerifyOptions Recognizer::part_verify_options() const {
+  VerifyOptions part = options_.verify;
+  part.max_unmeasured_fraction = std::min(part.max_unmeasured_fraction, options_.split.part_max_unmeasured_fraction);
+  part.min_inlier_fraction = std::max(part.min_inlier_fraction, options_.split.part_min_inlier_fraction);
+  part.min_cluster_explained = std::max(part.min_cluster_explained, options_.split.part_min_cluster_explained);
+  return part;
+}
+
+void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Recognition& out) const {
+  const auto t = Clock::now();
+  // Pieces of one object lie within its diameter.
+  const double widest = largest_diameter_m_;
+  // Each detection's bounding sphere: only the clusters it reaches lose points to it.
+  std::vector<std::pair<Eigen::Vector3f, float>> spheres;
+  for (const Detection& d : out.detections) {
+    const DatabaseObject& object = db_.objects[d.object_index];
+    const BoundingBox box = bounding_box(object.model_points);
+    const Eigen::Vector3d centre = d.T_camera_object * (0.5f * (box.min + box.max)).cast<double>();
+    spheres.emplace_back(centre.cast<float>(), 0.5f * box.diagonal() + options_.verify.max_tolerance_m);
+  }
+  // The pieces no detection explains: clusters no detection reaches, whole; what detections leave
+  // of the others, in clusters of its own. Pieces wider than an object cannot be one's part, and
+  // where the depth noise verification allows reaches the clusters' own gap (a Kinect's at about
+  // 2 m), a surface breaks into pieces by noise alone: pieces there say nothing of one object.
+  std::vector<PointCloud> pieces;
+  std::vector<BoundingBox> boxes;
+  std::vector<float> depths;  // each piece's mean depth
+  const auto too_far = [&](float z) { return !(depth_tolerance(z, options_.verify) < options_.segment.clusters.tolerance_m); };
+  const auto keep = [&](PointCloud&& piece) {
+    const BoundingBox box = bounding_box(piece.points);
+    if (box.diagonal() > widest || piece.points.empty()) return;
+    double z = 0;
+    for (const Eigen::Vector3f& p : piece.points) z += p.z();
+    z /= static_cast<double>(piece.size());
+    if (too_far(static_cast<float>(z))) return;
+    pieces.push_back(std::move(piece));
+    boxes.push_back(box);
+    depths.push_back(static_cast<float>(z));
+  };
+  for (const Cluster& c : seg.clusters) {
+    BoundingBox box;
+    for (const std::uint32_t i : c) box.extend(seg.points.points[i]);
+    if (box.empty || too_far(box.min.z())) continue;  // (no piece of it can be nearer)
+    std::vector<std::size_t> reaching;
+    for (std::size_t k = 0; k < spheres.size(); ++k) {
+      const auto& [centre, radius] = spheres[k];
+      if ((centre.cwiseMax(box.min).cwiseMin(box.max) - centre).norm() <= radius) reaching.push_back(k);
+    }
+    if (reaching.empty() && box.diagonal() > widest) continue;
+    PointCloud points = cluster_points(seg.points, c);
+    if (reaching.empty()) {
+      keep(std::move(points));
+      continue;
+    }
+    std::vector<char> explained(points.size(), 0);
+    for (const std::size_t k : reaching) {
+      const std::vector<char> by_d = explained_points(out.detections[k], points);
+      for (std::size_t i = 0; i < points.size(); ++i) explained[i] = explained[i] || by_d[i];
+    }
+    std::vector<std::uint32_t> rest;
+    for (std::uint32_t i = 0; i < points.size(); ++i) {
+      if (!explained[i]) rest.push_back(i);
+    }
+    for (const Cluster& r : euclidean_clusters(points, rest, options_.segment.clusters)) keep(cluster_points(points, r));
+  }
+  // The pairs near enough and small enough together to be one object's pieces.
+  const float gap = options_.split.join_gap_m;
+  struct Pair {
+    std::size_t a, b;
+    float gap_m;
+  };
+  std::vector<Pair> pairs;
+  for (std::size_t a = 0; a < pieces.size(); ++a) {
+    for (std::size_t b = a + 1; b < pieces.size(); ++b) {
+      BoundingBox joint = boxes[a];
+      joint.extend(boxes[b].min), joint.extend(boxes[b].max);
+      if (joint.diagonal() > widest) continue;
+      // The boxes' own gap bounds the points' from below: most pairs end here.
+      const Eigen::Vector3f box_gap = (boxes[a].min - boxes[b].max).cwiseMax(boxes[b].min - boxes[a].max).cwiseMax(0.0f);
+      if (box_gap.norm() > gap) continue;
+      const KdTree tree(pieces[b].points);
+      float nearest = gap * gap;
+      bool near = false;
+      for (const Eigen::Vector3f& p : pieces[a].points) {
+        std::uint32_t index = 0;
+        float d2 = 0;
+        if (tree.nearest_within(p, nearest, index, d2)) nearest = d2, near = true;
+      }
+      if (near) pairs.push_back({a, b, std::sqrt(nearest)});
+    }
+  }
+  if (!pairs.empty()) {
+    // ... and cut apart by the sensor's missing depth (segment/depth_gaps.hpp): no wider in the
+    // image than the gap at the nearer one's depth.
+    const auto gap_px = [&](float z) { return static_cast<int>(std::ceil(gap * frame.K.fx / std::max(0.1f, z))); };
+    std::vector<std::span<const Eigen::Vector3f>> spans;
+    for (const PointCloud& piece : pieces) spans.emplace_back(piece.points);
+    const float z_near = *std::min_element(depths.begin(), depths.end());
+    const std::vector<DepthGap> gaps =
+        frame.K.fx > 0 ? missing_depth_gaps(frame.depth, frame.K, spans, db_.params.voxel_m, options_.verify.max_tolerance_m, gap_px(z_near))
+                       : std::vector<DepthGap>{};
+    std::erase_if(pairs, [&](const Pair& pair) {
+      const auto g = std::find_if(gaps.begin(), gaps.end(), [&](const DepthGap& d) { return d.a == pair.a && d.b == pair.b; });
+      return g == gaps.end() || g->unmeasured_px > gap_px(std::min(depths[pair.a], depths[pair.b]));
+    });
+  }
+  std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.gap_m < y.gap_m; });
+  out.times.split_ms += ms_since(t);
+  const VerifyOptions part_verify = part_verify_options();
+  std::vector<char> used(pieces.size(), 0);
+  for (const Pair& pair : pairs) {
+    if (used[pair.a] || used[pair.b]) continue;
+    if (out_of_time(out)) return;
+    PointCloud joined = pieces[pair.a];
+    joined.points.insert(joined.points.end(), pieces[pair.b].points.begin(), pieces[pair.b].points.end());
+    joined.normals.clear();  // (described afresh)
+    if (!joined.labels.empty()) joined.labels.insert(joined.labels.end(), pieces[pair.b].labels.begin(), pieces[pair.b].labels.end());
+    joined.width = static_cast<int>(joined.points.size());
+    ++out.joined_regions;
+    std::optional<Detection> det = recognize_cluster(joined, frame, part_verify, out, nullptr, true);
+    if (!det) continue;
+    det->from_split_cluster = true;
+    out.detections.push_back(std::move(*det));
+    used[pair.a] = used[pair.b] = 1;
+  }
 }
 
 void Recognizer::explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,

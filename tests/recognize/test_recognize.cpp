@@ -912,6 +912,53 @@ TEST(RealData, ACanStandingOnABoxAndTheBoxAreFoundTogetherFromPointPairVotes) {
   }
 }
 
+TEST(RealData, AMugSeenInTwoPiecesIsFoundWhenThePiecesAreSearchedTogether) {
+  // YCB-Video 0000 frame 5 (ycbv_real_dev): the gelatin box, the mug and the foam brick touching.
+  // The Xtion returns no depth on the mug's rim: its inside is a cluster of its own, its outside
+  // is what the box and the brick leave of theirs, and neither piece carries the mug alone. The
+  // two, joined by a ring of missing pixels, are searched as one region
+  // (SplitOptions::join_gap_m). Measured: the mug within ADD-S 5 mm; without the join, not found.
+#ifdef VIEWPOSE_SANITIZER_BUILD
+  GTEST_SKIP() << "skipped under the sanitizers: point pair votes on a real frame take minutes there";
+#endif
+  VIEWPOSE_REQUIRE_SHARED_DATA();
+  const auto dir = test::shared_data() / "ycbv_real_dev";
+  const BopDataset ds = open_bop_dataset(dir, "test", {"models"});
+  std::vector<ObjectModel> models;
+  for (int id : {1, 3, 8, 9, 11, 14, 21}) {  // the dataset's seven, as make results builds them
+    PlyFile ply = read_ply(ds.model_files.at(id));
+    for (auto& v : ply.mesh.vertices) v *= 0.001f;
+    ply.mesh.normals.clear();
+    models.push_back({id, fmt::format("obj_{:06d}", id), std::move(ply.mesh)});
+  }
+  const ViewDatabase db = build_view_database(models, DatabaseParams{});
+  const auto image = std::find_if(ds.images.begin(), ds.images.end(), [](const BopImage& im) { return im.scene_id == 0 && im.im_id == 5; });
+  ASSERT_NE(image, ds.images.end());
+  const BopFrame bf = load_bop_frame(*image);
+  for (const float join_gap_m : {SplitOptions{}.join_gap_m, 0.0f}) {
+    SCOPED_TRACE(join_gap_m > 0 ? "pieces joined" : "no join");
+    RecognizerOptions options;
+    options.split.join_gap_m = join_gap_m;
+    const Recognition r = Recognizer(db, options).recognize(frame_from_depth(bf.depth, bf.K));
+    std::set<int> found;
+    for (const Detection& d : r.detections) {
+      const DatabaseObject& object = *std::find_if(db.objects.begin(), db.objects.end(), [&](const DatabaseObject& o) { return o.id == d.object_id; });
+      double error = 1e9;
+      for (const GroundTruthPose& g : image->gt) {
+        if (g.obj_id == d.object_id) error = std::min(error, add_s_error(d.T_camera_object, g.T_camera_object, object.mesh.vertices));
+      }
+      EXPECT_LT(error, 0.1 * object.diameter_m) << "a false positive: " << d.object_name;
+      if (error < 0.1 * object.diameter_m) found.insert(d.object_id);
+      if (d.object_id == 14) {
+        EXPECT_LT(error, 0.005);
+      }
+    }
+    EXPECT_EQ(found.count(14), join_gap_m > 0 ? 1u : 0u);
+    EXPECT_EQ(r.joined_regions > 0, join_gap_m > 0);
+    EXPECT_TRUE(found.count(8) && found.count(21));
+  }
+}
+
 TEST(RealData, AScannedMilkCartonIsFoundInTheKinectSceneWithinThreeMillimetres) {
   // The thesis's other way to fill a database: a view scanned with the sensor. milk.pcd is the
   // carton's partial model (its frame is the capture's); the scene holds it among other cartons
