@@ -764,6 +764,43 @@ TEST(Recognize, ACanIsReportedStandingOnItsTableByACameraUpsideDown) {
   EXPECT_EQ(fixed_reference_upside_down, 1u) << "the camera's default up fails the rolled camera alone";
 }
 
+TEST(Recognize, AJugCutInTwoByABandOfMissingDepthIsFoundFromBothPieces) {
+  // A band of rows with no depth across the jug's middle (a dark label, a shiny stripe): 10 or 14
+  // pixels at 1 m, 2-3 cm, wider than a cluster's gap, so the jug comes out as two clusters and
+  // neither half carries it (verification wants most of the pose's surface on its cluster). The
+  // halves, joined in the image by the missing depth, are searched together
+  // (SplitOptions::join_gap_m). Narrower bands leave one cluster: nothing to join.
+  const ViewDatabase& db = jug_and_can_db();
+  const JugAndCan scene = jug_and_can_scene();
+  const SimulatedFrame f = simulate_image(scene.ds, SimImage{{{0, scene.jug_pose}}}, SensorModel::kinect_v1(), 5);
+  int top = f.depth.height, bottom = 0;  // the jug's rows in the image
+  for (const Eigen::Vector3f& p : make_jug().vertices) {
+    const int v = static_cast<int>(std::lround(K.project(scene.jug_pose * p.cast<double>()).y()));
+    top = std::min(top, v), bottom = std::max(bottom, v);
+  }
+  for (const int band : {0, 6, 10, 14}) {
+    DepthImage cut = f.depth;
+    for (int v = (top + bottom - band) / 2; v < (top + bottom - band) / 2 + band; ++v)
+      for (int u = 0; u < cut.width; ++u) cut.at(u, v) = NAN;
+    for (const float join_gap_m : {SplitOptions{}.join_gap_m, 0.0f}) {
+      SCOPED_TRACE(fmt::format("a band of {} rows, {}", band, join_gap_m > 0 ? "pieces joined" : "no join"));
+      RecognizerOptions options;
+      options.split.join_gap_m = join_gap_m;
+      const Recognition r = Recognizer(db, options).recognize(frame_from_depth(cut, K));
+      const bool in_two = band >= 10;
+      EXPECT_EQ(r.clusters, in_two ? 2u : 1u);
+      EXPECT_EQ(r.joined_regions, in_two && join_gap_m > 0 ? 1u : 0u);
+      if (in_two && join_gap_m == 0) {
+        EXPECT_TRUE(r.detections.empty()) << "neither half alone";
+        continue;
+      }
+      ASSERT_EQ(r.detections.size(), 1u);
+      EXPECT_EQ(r.detections[0].object_id, 1);
+      EXPECT_LT(add_s_error(r.detections[0].T_camera_object, scene.jug_pose, make_jug().vertices), 0.005);
+    }
+  }
+}
+
 TEST(Frame, IntrinsicsAreRecoveredFromAnOrganizedCloud) {
   const CameraIntrinsics truth{570.3, 565.1, 321.7, 236.2, 640, 480};
   DepthImage d(640, 480);

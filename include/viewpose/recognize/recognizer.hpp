@@ -198,14 +198,16 @@ struct SplitOptions {
   /// One object the sensor sees in two pieces: a mug's or a bowl's inside and outside, cut apart by
   /// the rim it returns no depth for (and a step over the front rim), or a box by a dark band of
   /// print. Neither piece carries the object alone. Once the frame's clusters are searched, two
-  /// pieces that no detection explains are searched as one region, with the point pair votes'
-  /// poses too and the part bounds above, when they lie nearer each other than this, together no
-  /// wider than the largest object, nearer the camera than where the depth noise verification
+  /// pieces that no detection explains are searched as one region, with the part bounds above,
+  /// when they lie nearer each other than this, together no wider than the largest object (and
+  /// the largest tolerance), nearer the camera than where the depth noise verification
   /// allows reaches the clusters' gap (there a surface breaks into pieces by noise alone: a
   /// Kinect's at about 2 m), and are joined in the image by a path of missing depth no wider than
   /// this at their depth (segment/depth_gaps.hpp). Nearest pair first, each piece in one pair at
-  /// most. Measured: on the real YCB-V dev frames one pair is searched (the mug of 0000 frame 5,
-  /// found, 5 ms); on the simulated rooms three in 20 frames, none passing (0: not tried).
+  /// most. The views' poses only: votes over the eight HOPE objects made the one pair of a real
+  /// mOSD frame cost 45 ms instead of 5, and the views found what they found. Measured: on the real
+  /// YCB-V dev frames one pair is searched (the mug of 0000 frame 5, found); on the mOSD frames one
+  /// in ten, on the simulated rooms seven in 20, none passing (0: not tried).
   float join_gap_m = 0.05f;
 };
 
