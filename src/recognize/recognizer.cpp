@@ -175,6 +175,8 @@ const Recognizer::PreparedObject& Recognizer::prepared(std::uint32_t object) con
       p.drawn = error_m > 0 ? simplify_for_drawing(o.mesh, error_m) : o.mesh;
     }
     p.closed_winding = closed_mesh_winding(p.drawn);
+    p.standing_axes = {Eigen::Vector3d::UnitZ()};
+    for (const Transform& S : o.symmetries.discrete) p.standing_axes.push_back(S.linear().col(2));
   });
   return p;
 }
@@ -273,6 +275,7 @@ Recognition Recognizer::recognize(const Frame& frame) const {
 }
 
 void Recognizer::stand_on_resting_planes(std::span<const Plane> planes, Recognition& out) const {
+  const auto t = Clock::now();
   std::vector<Eigen::Vector4f> coefficients;
   for (const Plane& plane : planes) coefficients.push_back(plane.coefficients);
   for (Detection& d : out.detections) {
@@ -282,13 +285,12 @@ void Recognizer::stand_on_resting_planes(std::span<const Plane> planes, Recognit
     // tolerates of the pose at the object's depth.
     const float touch_m = options_.segment.planes.distance_threshold_m +
                           depth_tolerance(static_cast<float>(d.T_camera_object.translation().z()), options_.verify);
-    // Its z, and where its symmetries turn z elsewhere (a cube's), those too.
-    std::vector<Eigen::Vector3d> standing_axes = {Eigen::Vector3d::UnitZ()};
-    for (const Transform& S : object.symmetries.discrete) standing_axes.push_back(S.linear().col(2));
+    const std::vector<Eigen::Vector3d>& standing_axes = prepared(d.object_index).standing_axes;
     if (const std::optional<Eigen::Vector3d> up = resting_plane_up(coefficients, object.model_points, d.T_camera_object, standing_axes, touch_m)) {
       d.T_camera_object = canonical_pose(d.T_camera_object, object.symmetries, *up);
     }
   }
+  out.times.verify_ms += ms_since(t);
 }
 
 void Recognizer::merge_part(Recognition&& part, Recognition& out) {

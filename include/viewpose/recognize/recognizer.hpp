@@ -496,6 +496,9 @@ class Recognizer {
     OccupancyGrid occupancy;  // of the model points, for coarse_fit
     TriangleMesh drawn;      // the mesh verification draws (simplified)
     int closed_winding = 0;  // closed_mesh_winding of `drawn`
+    // Its z, and where its symmetries turn z elsewhere (a cube's), those too: the axes it may stand
+    // on (stand_on_resting_planes).
+    std::vector<Eigen::Vector3d> standing_axes;
     std::once_flag ppf_once;  // the pair table is made only where pair votes are asked for
     std::unique_ptr<PpfModel> ppf;
   };
@@ -509,6 +512,7 @@ class Recognizer {
   void resolve_scene(const Frame& frame, Recognition& out) const;
   // Each symmetric object that stands on one of the frame's removed planes reported standing on it
   // as modelled (canonical_pose with the plane's up; search chose with the camera's default up).
+  // Timed as verification.
   void stand_on_resting_planes(std::span<const Plane> planes, Recognition& out) const;
   // A cluster's own record (RunOptions::parallel_clusters) added to the frame's: its detections
   // after those before, its counts and stage times summed.
