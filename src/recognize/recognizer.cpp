@@ -404,36 +404,28 @@ VerifyOptions Recognizer::part_verify_options() const {
   return part;
 }
 
-void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Recognition& out) const {
-  const auto t = Clock::now();
-  // Pieces of one object lie within its diameter (and the largest tolerance).
-  const double widest = largest_diameter_m_ + options_.verify.max_tolerance_m;
+std::vector<Recognizer::Piece> Recognizer::unexplained_pieces(const Segmentation& seg, std::span<const Detection> detections,
+                                                              double widest) const {
   // Each detection's bounding sphere: only the clusters it reaches lose points to it.
   std::vector<std::pair<Eigen::Vector3f, float>> spheres;
-  for (const Detection& d : out.detections) {
+  for (const Detection& d : detections) {
     const DatabaseObject& object = db_.objects[d.object_index];
     const BoundingBox box = bounding_box(object.model_points);
     const Eigen::Vector3d centre = d.T_camera_object * (0.5f * (box.min + box.max)).cast<double>();
     spheres.emplace_back(centre.cast<float>(), 0.5f * box.diagonal() + options_.verify.max_tolerance_m);
   }
-  // The pieces no detection explains: clusters no detection reaches, whole; what detections leave
-  // of the others, in clusters of its own. Pieces wider than an object cannot be one's part, and
-  // where the depth noise verification allows reaches the clusters' own gap (a Kinect's at about
+  // Where the depth noise verification allows reaches the clusters' own gap (a Kinect's at about
   // 2 m), a surface breaks into pieces by noise alone: pieces there say nothing of one object.
-  std::vector<PointCloud> pieces;
-  std::vector<BoundingBox> boxes;
-  std::vector<float> depths;  // each piece's mean depth
   const auto too_far = [&](float z) { return !(depth_tolerance(z, options_.verify) < options_.segment.clusters.tolerance_m); };
-  const auto keep = [&](PointCloud&& piece) {
-    const BoundingBox box = bounding_box(piece.points);
-    if (piece.points.empty() || width_of({&piece}) > widest) return;
+  std::vector<Piece> pieces;
+  const auto keep = [&](PointCloud&& points) {
+    if (points.points.empty() || width_of({&points}) > widest) return;
     double z = 0;
-    for (const Eigen::Vector3f& p : piece.points) z += p.z();
-    z /= static_cast<double>(piece.size());
+    for (const Eigen::Vector3f& p : points.points) z += p.z();
+    z /= static_cast<double>(points.size());
     if (too_far(static_cast<float>(z))) return;
-    pieces.push_back(std::move(piece));
-    boxes.push_back(box);
-    depths.push_back(static_cast<float>(z));
+    const BoundingBox box = bounding_box(points.points);
+    pieces.push_back({std::move(points), box, static_cast<float>(z)});
   };
   for (const Cluster& c : seg.clusters) {
     BoundingBox box;
@@ -452,7 +444,7 @@ void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Rec
     }
     std::vector<char> explained(points.size(), 0);
     for (const std::size_t k : reaching) {
-      const std::vector<char> by_d = explained_points(out.detections[k], points);
+      const std::vector<char> by_d = explained_points(detections[k], points);
       for (std::size_t i = 0; i < points.size(); ++i) explained[i] = explained[i] || by_d[i];
     }
     std::vector<std::uint32_t> rest;
@@ -462,6 +454,14 @@ void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Rec
     if (rest.size() < options_.segment.clusters.min_points) continue;  // (too few for any cluster: most found objects')
     for (const Cluster& r : euclidean_clusters(points, rest, options_.segment.clusters)) keep(cluster_points(points, r));
   }
+  return pieces;
+}
+
+void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Recognition& out) const {
+  const auto t = Clock::now();
+  // Pieces of one object lie within its diameter (and the largest tolerance).
+  const double widest = largest_diameter_m_ + options_.verify.max_tolerance_m;
+  const std::vector<Piece> pieces = unexplained_pieces(seg, out.detections, widest);
   // The pairs near enough and small enough together to be one object's pieces.
   const float gap = options_.split.join_gap_m;
   struct Pair {
@@ -472,12 +472,12 @@ void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Rec
   for (std::size_t a = 0; a < pieces.size(); ++a) {
     for (std::size_t b = a + 1; b < pieces.size(); ++b) {
       // The boxes' own gap bounds the points' from below: most pairs end here.
-      const Eigen::Vector3f box_gap = (boxes[a].min - boxes[b].max).cwiseMax(boxes[b].min - boxes[a].max).cwiseMax(0.0f);
-      if (box_gap.norm() > gap || width_of({&pieces[a], &pieces[b]}) > widest) continue;
-      const KdTree tree(pieces[b].points);
+      const Eigen::Vector3f box_gap = (pieces[a].box.min - pieces[b].box.max).cwiseMax(pieces[b].box.min - pieces[a].box.max).cwiseMax(0.0f);
+      if (box_gap.norm() > gap || width_of({&pieces[a].points, &pieces[b].points}) > widest) continue;
+      const KdTree tree(pieces[b].points.points);
       float nearest = gap * gap;
       bool near = false;
-      for (const Eigen::Vector3f& p : pieces[a].points) {
+      for (const Eigen::Vector3f& p : pieces[a].points.points) {
         std::uint32_t index = 0;
         float d2 = 0;
         if (tree.nearest_within(p, nearest, index, d2)) nearest = d2, near = true;
@@ -490,14 +490,14 @@ void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Rec
     // image than the gap at the nearer one's depth.
     const auto gap_px = [&](float z) { return static_cast<int>(std::ceil(gap * frame.K.fx / std::max(0.1f, z))); };
     std::vector<std::span<const Eigen::Vector3f>> spans;
-    for (const PointCloud& piece : pieces) spans.emplace_back(piece.points);
-    const float z_near = *std::min_element(depths.begin(), depths.end());
+    float z_near = std::numeric_limits<float>::infinity();
+    for (const Piece& piece : pieces) spans.emplace_back(piece.points.points), z_near = std::min(z_near, piece.depth_m);
     const std::vector<DepthGap> gaps =
         frame.K.fx > 0 ? missing_depth_gaps(frame.depth, frame.K, spans, db_.params.voxel_m, options_.verify.max_tolerance_m, gap_px(z_near))
                        : std::vector<DepthGap>{};
     std::erase_if(pairs, [&](const Pair& pair) {
       const auto g = std::find_if(gaps.begin(), gaps.end(), [&](const DepthGap& d) { return d.a == pair.a && d.b == pair.b; });
-      return g == gaps.end() || g->unmeasured_px > gap_px(std::min(depths[pair.a], depths[pair.b]));
+      return g == gaps.end() || g->unmeasured_px > gap_px(std::min(pieces[pair.a].depth_m, pieces[pair.b].depth_m));
     });
   }
   std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.gap_m < y.gap_m; });
@@ -507,10 +507,11 @@ void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Rec
   for (const Pair& pair : pairs) {
     if (used[pair.a] || used[pair.b]) continue;
     if (out_of_time(out)) return;
-    PointCloud joined = pieces[pair.a];
-    joined.points.insert(joined.points.end(), pieces[pair.b].points.begin(), pieces[pair.b].points.end());
+    PointCloud joined = pieces[pair.a].points;
+    const PointCloud& other = pieces[pair.b].points;
+    joined.points.insert(joined.points.end(), other.points.begin(), other.points.end());
     joined.normals.clear();  // (described afresh)
-    if (!joined.labels.empty()) joined.labels.insert(joined.labels.end(), pieces[pair.b].labels.begin(), pieces[pair.b].labels.end());
+    if (!joined.labels.empty()) joined.labels.insert(joined.labels.end(), other.labels.begin(), other.labels.end());
     joined.width = static_cast<int>(joined.points.size());
     ++out.joined_regions;
     // (The views' poses alone: SplitOptions::join_gap_m says why.)

@@ -446,8 +446,18 @@ class Recognizer {
   // A cluster, or what is left of one: recognized whole, else split into convex parts; once a part
   // is recognized, its object's points are taken away and the rest recognized again (depth + 1).
   void recognize_region(const PointCloud& points, const Frame& frame, Recognition& out, int depth) const;
-  // Pairs of pieces of the frame that no detection explains, near each other (SplitOptions::
-  // join_gap_m), each searched as one region; what passes is added.
+  // A piece of the frame no detection explains: a cluster no detection reaches, or a cluster of
+  // what detections leave of one.
+  struct Piece {
+    PointCloud points;
+    BoundingBox box;
+    float depth_m = 0;  // mean
+  };
+  // The frame's pieces no wider than `widest`, and nearer than where the depth noise verification
+  // allows reaches the clusters' gap.
+  std::vector<Piece> unexplained_pieces(const Segmentation& seg, std::span<const Detection> detections, double widest) const;
+  // Pairs of those pieces near each other and cut apart by missing depth (SplitOptions::
+  // join_gap_m), each searched as one region, nearest first; what passes is added.
   void join_fragments(const Segmentation& seg, const Frame& frame, Recognition& out) const;
   // `verify` tightened for a part of a region (SplitOptions::part_*).
   VerifyOptions part_verify_options() const;
