@@ -24,6 +24,7 @@
 #include "viewpose/pose/resting_plane.hpp"
 #include "viewpose/core/threads.hpp"
 #include "viewpose/recognize/candidate_order.hpp"
+#include "viewpose/render/sensor_model.hpp"
 #include "viewpose/render/simplify.hpp"
 #include "viewpose/segment/convex_segments.hpp"
 #include "viewpose/segment/depth_gaps.hpp"
@@ -119,6 +120,9 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
   }
   // Pair tables may be made later, on a cluster's thread: their options are checked now.
   if (options_.match.source != PoseSource::vfh) check_ppf_options(options_.match.ppf);
+  if (!(options_.split.join_gap_m >= 0 && options_.split.join_gap_m <= 1)) {
+    throw Error(fmt::format("recognize: the gap between pieces joined is {} m, not within 0-1 m", options_.split.join_gap_m));
+  }
   if (db.objects.size() <= options_.run.prepare_objects_up_to) {
     // Each object on a thread.
     const auto each_object = [&](const auto& prepare) {
@@ -175,6 +179,7 @@ const Recognizer::PreparedObject& Recognizer::prepared(std::uint32_t object) con
       p.drawn = error_m > 0 ? simplify_for_drawing(o.mesh, error_m) : o.mesh;
     }
     p.closed_winding = closed_mesh_winding(p.drawn);
+    p.model_box = bounding_box(o.model_points);
     p.standing_axes = {Eigen::Vector3d::UnitZ()};
     for (const Transform& S : o.symmetries.discrete) p.standing_axes.push_back(S.linear().col(2));
   });
@@ -409,14 +414,17 @@ std::vector<Recognizer::Piece> Recognizer::unexplained_pieces(const Segmentation
   // Each detection's bounding sphere: only the clusters it reaches lose points to it.
   std::vector<std::pair<Eigen::Vector3f, float>> spheres;
   for (const Detection& d : detections) {
-    const DatabaseObject& object = db_.objects[d.object_index];
-    const BoundingBox box = bounding_box(object.model_points);
+    const BoundingBox& box = prepared(d.object_index).model_box;
     const Eigen::Vector3d centre = d.T_camera_object * (0.5f * (box.min + box.max)).cast<double>();
     spheres.emplace_back(centre.cast<float>(), 0.5f * box.diagonal() + options_.verify.max_tolerance_m);
   }
   // Where the depth noise verification allows reaches the clusters' own gap (a Kinect's at about
   // 2 m), a surface breaks into pieces by noise alone: pieces there say nothing of one object.
-  const auto too_far = [&](float z) { return !(depth_tolerance(z, options_.verify) < options_.segment.clusters.tolerance_m); };
+  // (Without the tolerance's cap: the depth where the noise itself reaches the gap.)
+  const VerifyOptions& o = options_.verify;
+  const auto too_far = [&](float z) {
+    return !(o.base_tolerance_m + o.noise_factor * axial_noise_sigma_frontal(z) < options_.segment.clusters.tolerance_m);
+  };
   std::vector<Piece> pieces;
   const auto keep = [&](PointCloud&& points) {
     if (points.points.empty() || width_of({&points}) > widest) return;
@@ -469,12 +477,14 @@ void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Rec
     float gap_m;
   };
   std::vector<Pair> pairs;
+  std::vector<std::optional<KdTree>> trees(pieces.size());  // each made when first asked for
   for (std::size_t a = 0; a < pieces.size(); ++a) {
     for (std::size_t b = a + 1; b < pieces.size(); ++b) {
       // The boxes' own gap bounds the points' from below: most pairs end here.
       const Eigen::Vector3f box_gap = (pieces[a].box.min - pieces[b].box.max).cwiseMax(pieces[b].box.min - pieces[a].box.max).cwiseMax(0.0f);
       if (box_gap.norm() > gap || width_of({&pieces[a].points, &pieces[b].points}) > widest) continue;
-      const KdTree tree(pieces[b].points.points);
+      if (!trees[b]) trees[b].emplace(pieces[b].points.points);
+      const KdTree& tree = *trees[b];
       float nearest = gap * gap;
       bool near = false;
       for (const Eigen::Vector3f& p : pieces[a].points.points) {
@@ -485,21 +495,14 @@ void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Rec
       if (near) pairs.push_back({a, b, std::sqrt(nearest)});
     }
   }
-  if (!pairs.empty()) {
-    // ... and cut apart by the sensor's missing depth (segment/depth_gaps.hpp): no wider in the
-    // image than the gap at the nearer one's depth.
-    const auto gap_px = [&](float z) { return static_cast<int>(std::ceil(gap * frame.K.fx / std::max(0.1f, z))); };
-    std::vector<std::span<const Eigen::Vector3f>> spans;
-    float z_near = std::numeric_limits<float>::infinity();
-    for (const Piece& piece : pieces) spans.emplace_back(piece.points.points), z_near = std::min(z_near, piece.depth_m);
-    const std::vector<DepthGap> gaps =
-        frame.K.fx > 0 ? missing_depth_gaps(frame.depth, frame.K, spans, db_.params.voxel_m, options_.verify.max_tolerance_m, gap_px(z_near))
-                       : std::vector<DepthGap>{};
-    std::erase_if(pairs, [&](const Pair& pair) {
-      const auto g = std::find_if(gaps.begin(), gaps.end(), [&](const DepthGap& d) { return d.a == pair.a && d.b == pair.b; });
-      return g == gaps.end() || g->unmeasured_px > gap_px(std::min(pieces[pair.a].depth_m, pieces[pair.b].depth_m));
-    });
-  }
+  // ... and cut apart by the sensor's missing depth (segment/depth_gaps.hpp): no wider in the image
+  // than the gap at the nearer one's depth. One pair at a time, so that no other piece's growth
+  // takes the pixels between them (a few pairs a frame).
+  std::erase_if(pairs, [&](const Pair& pair) {
+    const int gap_px = static_cast<int>(std::ceil(gap * frame.K.fx / std::max(0.1f, std::min(pieces[pair.a].depth_m, pieces[pair.b].depth_m))));
+    const std::array<std::span<const Eigen::Vector3f>, 2> two = {pieces[pair.a].points.points, pieces[pair.b].points.points};
+    return missing_depth_gaps(frame.depth, frame.K, two, db_.params.voxel_m, options_.verify.max_tolerance_m, gap_px).empty();
+  });
   std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.gap_m < y.gap_m; });
   out.times.split_ms += ms_since(t);
   const VerifyOptions part_verify = part_verify_options();

@@ -12,7 +12,11 @@ std::vector<DepthGap> missing_depth_gaps(const DepthImage& depth, const CameraIn
                                          std::span<const std::span<const Eigen::Vector3f>> pieces, float point_spacing_m,
                                          float depth_tolerance_m, int max_unmeasured_px) {
   const int W = depth.width, H = depth.height;
-  if (W <= 0 || H <= 0 || pieces.size() < 2 || max_unmeasured_px < 1 || static_cast<std::size_t>(W) * H != depth.depth_m.size()) return {};
+  if (W <= 0 || H <= 0 || pieces.size() < 2 || max_unmeasured_px < 1 || static_cast<std::size_t>(W) * H != depth.depth_m.size() ||
+      K.width != W || K.height != H || !(K.fx > 0) || !(K.fy > 0)) {
+    return {};
+  }
+  const auto measured = [](float z) { return std::isfinite(z) && z > 0; };  // (0: no measurement, as a driver writes it)
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   const auto index = [W](int u, int v) { return static_cast<std::size_t>(v) * static_cast<std::size_t>(W) + static_cast<std::size_t>(u); };
   // Each piece's measured pixels: those near a point's projection at the point's depth. A pixel two
@@ -31,7 +35,7 @@ std::vector<DepthGap> missing_depth_gaps(const DepthImage& depth, const CameraIn
         for (int u = std::max(0, cu - r); u <= std::min(W - 1, cu + r); ++u) {
           const std::size_t i = index(u, v);
           const float z = depth.depth_m[i];
-          if (label[i] != kNone || !std::isfinite(z) || std::abs(z - p.z()) > depth_tolerance_m) continue;
+          if (label[i] != kNone || !measured(z) || std::abs(z - p.z()) > depth_tolerance_m) continue;
           label[i] = k;
           front.push_back(i);
         }
@@ -66,7 +70,7 @@ std::vector<DepthGap> missing_depth_gaps(const DepthImage& depth, const CameraIn
           meet(i, j);
           continue;
         }
-        if (std::isfinite(depth.depth_m[j])) continue;  // measured, and no piece's: a path ends here
+        if (measured(depth.depth_m[j])) continue;  // measured, and no piece's: a path ends here
         label[j] = label[i];
         steps[j] = step;
         next.push_back(j);

@@ -164,6 +164,7 @@ void expect_same_recognition(const Recognition& a, const Recognition& b) {
   EXPECT_EQ(a.screened_out, b.screened_out);
   EXPECT_EQ(a.split_clusters, b.split_clusters);
   EXPECT_EQ(a.dropped_as_explained, b.dropped_as_explained);
+  EXPECT_EQ(a.joined_regions, b.joined_regions);
   ASSERT_EQ(a.detections.size(), b.detections.size());
   for (std::size_t i = 0; i < a.detections.size(); ++i) {
     EXPECT_EQ(a.detections[i].object_id, b.detections[i].object_id);
@@ -766,7 +767,7 @@ TEST(Recognize, ACanIsReportedStandingOnItsTableByACameraUpsideDown) {
 
 TEST(Recognize, AJugCutInTwoByABandOfMissingDepthIsFoundFromBothPieces) {
   // A band of rows with no depth across the jug's middle (a dark label, a shiny stripe): 10 or 14
-  // pixels at 1 m, 2-3 cm, wider than a cluster's gap, so the jug comes out as two clusters and
+  // rows at 1 m, 2-3 cm of its tilted surface, wider than a cluster's gap, so the jug comes out as two clusters and
   // neither half carries it (verification wants most of the pose's surface on its cluster). The
   // halves, joined in the image by the missing depth, are searched together
   // (SplitOptions::join_gap_m). Narrower bands leave one cluster: nothing to join.
@@ -799,6 +800,14 @@ TEST(Recognize, AJugCutInTwoByABandOfMissingDepthIsFoundFromBothPieces) {
       EXPECT_LT(add_s_error(r.detections[0].T_camera_object, scene.jug_pose, make_jug().vertices), 0.005);
     }
   }
+  // The same band measured, a surface 1.6 m away seen there (a gap between two things, not a hole
+  // in one): the halves are not joined.
+  DepthImage seen_through = f.depth;
+  for (int v = (top + bottom - 14) / 2; v < (top + bottom - 14) / 2 + 14; ++v)
+    for (int u = 0; u < seen_through.width; ++u) seen_through.at(u, v) = 1.6f;
+  const Recognition r = Recognizer(db).recognize(frame_from_depth(seen_through, K));
+  EXPECT_EQ(r.joined_regions, 0u);
+  EXPECT_TRUE(r.detections.empty());
 }
 
 TEST(Frame, IntrinsicsAreRecoveredFromAnOrganizedCloud) {

@@ -85,6 +85,34 @@ TEST(DepthGaps, APieceBetweenTwoHidesThePairBehindIt) {
   EXPECT_EQ(gaps[1].unmeasured_px, 5);
 }
 
+TEST(DepthGaps, APieceBesideTheBandCanTakeItsPixels) {
+  // Each unmeasured pixel goes to the piece that reaches it first: a small piece just beside the
+  // band (on no path between the two) takes the pixels next to it, and the two are no longer seen
+  // joined within the bound. Asked one pair at a time, as the recognizer asks, they are.
+  Scene s;
+  const auto a = s.measure(10, 30, 1.0f), b = s.measure(40, 60, 1.1f);
+  // The band is 3 rows high (28-30), the wall elsewhere; a piece of 3 x 3 pixels just below it.
+  for (int v = 20; v < 40; ++v)
+    for (int u = 30; u < 40; ++u) s.depth.at(u, v) = (v >= 28 && v <= 30) ? NAN : 3.0f;
+  std::vector<Eigen::Vector3f> c;
+  for (int v = 31; v < 34; ++v)
+    for (int u = 33; u < 36; ++u) s.depth.at(u, v) = 1.05f, c.push_back(s.K.unproject(u, v, 1.05f).cast<float>());
+  const std::vector<DepthGap> alone = s.gaps({a, b}, 10);
+  ASSERT_EQ(alone.size(), 1u);
+  EXPECT_EQ(alone[0].unmeasured_px, 10);
+  for (const DepthGap& g : s.gaps({a, b, c}, 10)) EXPECT_FALSE(g.a == 0 && g.b == 1) << "the third piece took the band's middle";
+}
+
+TEST(DepthGaps, ZeroDepthIsMissingDepth) {
+  // A driver's buffer marks missing pixels with 0, as depth_from_units keeps them if not converted.
+  Scene s;
+  const auto a = s.measure(10, 30, 1.0f), b = s.measure(40, 60, 1.1f);
+  for (int v = 20; v < 40; ++v)
+    for (int u = 30; u < 40; ++u) s.depth.at(u, v) = 0.0f;
+  ASSERT_EQ(s.gaps({a, b}, 10).size(), 1u);
+  EXPECT_EQ(s.gaps({a, b}, 10)[0].unmeasured_px, 10);
+}
+
 TEST(DepthGaps, APointClaimsOnlyPixelsAtItsOwnDepth) {
   // Points 5 cm off the image's depth (another surface, or a piece from another frame) stand for
   // no pixel: nothing to grow from.
@@ -117,6 +145,10 @@ TEST(DepthGaps, DegenerateInputsGiveNoGaps) {
   wrong.depth_m.resize(5);
   const std::vector<std::span<const Eigen::Vector3f>> spans = {a, b};
   EXPECT_TRUE(missing_depth_gaps(wrong, s.K, spans, 0.0f, 0.02f, 20).empty());
+  EXPECT_TRUE(missing_depth_gaps(DepthImage(50, 60), s.K, spans, 0.0f, 0.02f, 20).empty()) << "an image of another size than K's";
+  CameraIntrinsics no_focal = s.K;
+  no_focal.fx = 0;
+  EXPECT_TRUE(missing_depth_gaps(s.depth, no_focal, spans, 0.0f, 0.02f, 20).empty());
 }
 
 }  // namespace

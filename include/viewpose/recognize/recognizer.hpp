@@ -200,14 +200,16 @@ struct SplitOptions {
   /// print. Neither piece carries the object alone. Once the frame's clusters are searched, two
   /// pieces that no detection explains are searched as one region, with the part bounds above,
   /// when they lie nearer each other than this, together no wider than the largest object (and
-  /// the largest tolerance), nearer the camera than where the depth noise verification
-  /// allows reaches the clusters' gap (there a surface breaks into pieces by noise alone: a
-  /// Kinect's at about 2 m), and are joined in the image by a path of missing depth no wider than
-  /// this at their depth (segment/depth_gaps.hpp). Nearest pair first, each piece in one pair at
-  /// most. The views' poses only: votes over the eight HOPE objects made the one pair of a real
-  /// mOSD frame cost 45 ms instead of 5, and the views found what they found. Measured: on the real
-  /// YCB-V dev frames one pair is searched (the mug of 0000 frame 5, found); on the mOSD frames one
-  /// in ten, on the simulated rooms seven in 20, none passing (0: not tried).
+  /// VerifyOptions::max_tolerance_m), nearer the camera than where the depth noise verification
+  /// allows (without its cap) reaches the clusters' gap (there a surface breaks into pieces by
+  /// noise alone: a Kinect's at about 2 m), and are joined in the image by a path of missing depth no wider than
+  /// this at their depth (segment/depth_gaps.hpp). Nearest pair first; a piece in a pair that
+  /// gives a detection is in no later pair. The views' poses only: votes over the eight HOPE
+  /// objects made the one pair of a real mOSD frame cost 45 ms instead of 5, and the views found
+  /// what they found. Measured (`bop --details` and `recognize --json`'s joined_regions at
+  /// dcbc1e0): on the real YCB-V dev frames one pair is searched (the mug of 0000 frame 5, found);
+  /// on the mOSD frames one in ten, on the simulated rooms seven in 20, none passing (0: not
+  /// tried; at most 1 m).
   float join_gap_m = 0.05f;
 };
 
@@ -454,7 +456,7 @@ class Recognizer {
     float depth_m = 0;  // mean
   };
   // The frame's pieces no wider than `widest`, and nearer than where the depth noise verification
-  // allows reaches the clusters' gap.
+  // allows (uncapped) reaches the clusters' gap.
   std::vector<Piece> unexplained_pieces(const Segmentation& seg, std::span<const Detection> detections, double widest) const;
   // Pairs of those pieces near each other and cut apart by missing depth (SplitOptions::
   // join_gap_m), each searched as one region, nearest first; what passes is added.
@@ -509,6 +511,7 @@ class Recognizer {
     // Its z, and where its symmetries turn z elsewhere (a cube's), those too: the axes it may stand
     // on (stand_on_resting_planes).
     std::vector<Eigen::Vector3d> standing_axes;
+    BoundingBox model_box;  // of the model points (a detection's reach, join_fragments)
     std::once_flag ppf_once;  // the pair table is made only where pair votes are asked for
     std::unique_ptr<PpfModel> ppf;
   };
