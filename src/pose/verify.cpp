@@ -21,9 +21,11 @@ int nearest_pixel(double x) { return x >= 0 ? static_cast<int>(x + 0.5) : -stati
 
 }  // namespace
 
-float depth_tolerance(float z_m, const VerifyOptions& o) {
-  return std::min(o.max_tolerance_m, o.base_tolerance_m + o.noise_factor * axial_noise_sigma_frontal(z_m));
+float depth_noise_tolerance(float z_m, const VerifyOptions& o) {
+  return o.base_tolerance_m + o.noise_factor * axial_noise_sigma_frontal(z_m);
 }
+
+float depth_tolerance(float z_m, const VerifyOptions& o) { return std::min(o.max_tolerance_m, depth_noise_tolerance(z_m, o)); }
 
 namespace {
 

@@ -24,7 +24,6 @@
 #include "viewpose/pose/resting_plane.hpp"
 #include "viewpose/core/threads.hpp"
 #include "viewpose/recognize/candidate_order.hpp"
-#include "viewpose/render/sensor_model.hpp"
 #include "viewpose/render/simplify.hpp"
 #include "viewpose/segment/convex_segments.hpp"
 #include "viewpose/segment/depth_gaps.hpp"
@@ -89,6 +88,16 @@ double width_of(std::initializer_list<const PointCloud*> clouds) {
     }
   }
   return any ? static_cast<double>((hi - lo).maxCoeff()) : 0.0;
+}
+
+// The clusters of the points not `explained` (indices into `points`).
+std::vector<Cluster> clusters_of_unexplained(const PointCloud& points, const std::vector<char>& explained, const ClusterOptions& options) {
+  std::vector<std::uint32_t> rest;
+  for (std::uint32_t i = 0; i < points.size(); ++i) {
+    if (!explained[i]) rest.push_back(i);
+  }
+  if (rest.size() < options.min_points) return {};  // (too few for any cluster: most found objects')
+  return euclidean_clusters(points, rest, options);
 }
 
 }  // namespace
@@ -421,10 +430,7 @@ std::vector<Recognizer::Piece> Recognizer::unexplained_pieces(const Segmentation
   // Where the depth noise verification allows reaches the clusters' own gap (a Kinect's at about
   // 2 m), a surface breaks into pieces by noise alone: pieces there say nothing of one object.
   // (Without the tolerance's cap: the depth where the noise itself reaches the gap.)
-  const VerifyOptions& o = options_.verify;
-  const auto too_far = [&](float z) {
-    return !(o.base_tolerance_m + o.noise_factor * axial_noise_sigma_frontal(z) < options_.segment.clusters.tolerance_m);
-  };
+  const auto too_far = [&](float z) { return !(depth_noise_tolerance(z, options_.verify) < options_.segment.clusters.tolerance_m); };
   std::vector<Piece> pieces;
   const auto keep = [&](PointCloud&& points) {
     if (points.points.empty() || width_of({&points}) > widest) return;
@@ -455,12 +461,7 @@ std::vector<Recognizer::Piece> Recognizer::unexplained_pieces(const Segmentation
       const std::vector<char> by_d = explained_points(detections[k], points);
       for (std::size_t i = 0; i < points.size(); ++i) explained[i] = explained[i] || by_d[i];
     }
-    std::vector<std::uint32_t> rest;
-    for (std::uint32_t i = 0; i < points.size(); ++i) {
-      if (!explained[i]) rest.push_back(i);
-    }
-    if (rest.size() < options_.segment.clusters.min_points) continue;  // (too few for any cluster: most found objects')
-    for (const Cluster& r : euclidean_clusters(points, rest, options_.segment.clusters)) keep(cluster_points(points, r));
+    for (const Cluster& r : clusters_of_unexplained(points, explained, options_.segment.clusters)) keep(cluster_points(points, r));
   }
   return pieces;
 }
@@ -594,11 +595,7 @@ void Recognizer::recognize_rest(const PointCloud& points, Detection detection, c
 
 std::vector<Cluster> Recognizer::unexplained_clusters(const PointCloud& points, const std::vector<char>& explained, Recognition& out) const {
   const auto t = Clock::now();
-  std::vector<std::uint32_t> rest;
-  for (std::uint32_t i = 0; i < points.size(); ++i) {
-    if (!explained[i]) rest.push_back(i);
-  }
-  std::vector<Cluster> clusters = euclidean_clusters(points, rest, options_.segment.clusters);
+  std::vector<Cluster> clusters = clusters_of_unexplained(points, explained, options_.segment.clusters);
   out.times.split_ms += ms_since(t);
   return clusters;
 }

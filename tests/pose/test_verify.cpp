@@ -365,6 +365,10 @@ TEST(Verify, AFarWallGetsNoVerdictAndTheToleranceHasACap) {
   EXPECT_NEAR(v.mean_depth_m, 3.8, 0.01);  // the face, on the wall
   EXPECT_FLOAT_EQ(depth_tolerance(3.8f, VerifyOptions{}), 0.02f);
   EXPECT_LT(depth_tolerance(1.0f, VerifyOptions{}), 0.011f);  // nearer, the noise's tolerance as before
+  // The noise's own tolerance: the same below the cap; at 3.8 m far past it (5 mm + 2.5 sigma of
+  // 2.3 cm: 6.3 cm).
+  EXPECT_FLOAT_EQ(depth_noise_tolerance(1.0f, VerifyOptions{}), depth_tolerance(1.0f, VerifyOptions{}));
+  EXPECT_GT(depth_noise_tolerance(3.8f, VerifyOptions{}), 0.05f);
   // The cap alone: with the range lifted, the centimetres of noise fall outside 2 cm.
   VerifyOptions range_lifted;
   range_lifted.max_depth_m = 100;

@@ -156,8 +156,10 @@ bool passes(const Verification& v, const VerifyOptions& options);
 /// points lie beside it (VerifyOptions::min_footprint_explained), not by cluster_explained itself.
 bool explained_beside_neighbour(const Verification& v, const VerifyOptions& options);
 
-/// Tolerance (m) at depth z: base + factor * Kinect sigma(z).
+/// Tolerance (m) at depth z: base + factor * Kinect sigma(z), at most max_tolerance_m.
 float depth_tolerance(float z_m, const VerifyOptions& options);
+/// The same without the cap: what the sensor's noise alone asks for at depth z.
+float depth_noise_tolerance(float z_m, const VerifyOptions& options);
 
 /// The model as verification draws it: its mesh, or, for an object scanned as a point cloud (no
 /// triangles), its points splatted at their spacing.
