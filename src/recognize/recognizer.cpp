@@ -374,7 +374,7 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
     }
   }
   // Nothing passed: the region may be objects touching each other. Try its convex parts, largest
-  // first. Two objects side by side span at most twice the largest object.
+  // first (a pile of a few objects: SplitOptions::max_size_factor).
   if (!options_.split.enabled || depth >= options_.split.max_depth ||
       size > options_.split.max_size_factor * largest_diameter_m_ || out_of_time(out)) {
     if (partial && options_.split.enabled && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
