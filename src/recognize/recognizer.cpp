@@ -22,6 +22,7 @@
 #include "viewpose/pose/coarse_fit.hpp"
 #include "viewpose/pose/confidence.hpp"
 #include "viewpose/pose/resting_plane.hpp"
+#include "viewpose/pose/through_planes.hpp"
 #include "viewpose/core/threads.hpp"
 #include "viewpose/recognize/candidate_order.hpp"
 #include "viewpose/render/simplify.hpp"
@@ -281,11 +282,30 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     for (Recognition& part : parts) merge_part(std::move(part), out);
   }
   if (options_.split.enabled && options_.split.join_gap_m > 0 && !out_of_time(out)) join_fragments(seg, frame, out);
+  if (options_.accept.max_share_inside_planes < 1 && !seg.planes.empty() && !out.detections.empty()) {
+    drop_inside_planes(seg.planes, frame, out);
+  }
   // (Before the claims: they are judged at the poses reported.)
   if (options_.accept.canonical_poses && !seg.planes.empty()) stand_on_resting_planes(seg.planes, out);
   if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
   out.times.total_ms = ms_since(start);
   return out;
+}
+
+void Recognizer::drop_inside_planes(std::span<const Plane> planes, const Frame& frame, Recognition& out) const {
+  const auto t = Clock::now();
+  const ObservedPlanes observed(planes, frame.cloud, frame.K);
+  const std::size_t before = out.detections.size();
+  std::erase_if(out.detections, [&](const Detection& d) {
+    // Beyond the plane's own inlier band and what verification tolerates at the object's depth
+    // (as stand_on_resting_planes judges touching).
+    const float margin_m = options_.segment.planes.distance_threshold_m +
+                           depth_tolerance(static_cast<float>(d.T_camera_object.translation().z()), options_.verify);
+    const double share = observed.share_inside(db_.objects[d.object_index].model_points, d.T_camera_object, margin_m);
+    return share > options_.accept.max_share_inside_planes;
+  });
+  out.dropped_inside_planes += before - out.detections.size();
+  out.times.verify_ms += ms_since(t);
 }
 
 void Recognizer::stand_on_resting_planes(std::span<const Plane> planes, Recognition& out) const {

@@ -1036,6 +1036,34 @@ TEST(RealData, APileOfThreeSmallObjectsIsSplitWhenOnlyTheyAreInTheDatabase) {
   }
 }
 
+TEST(RealData, APoseWhoseHiddenPartLiesInsideTheTableIsDropped) {
+  // YCB-Video 0014 frame 2 (ycbv_real_dev) with only the pitcher in the database: besides the
+  // pitcher, a pitcher fitted to the master chef can passed every test of verification (score
+  // 1.00), its handle and spout "occluded" by the table they would stand in
+  // (AcceptOptions::max_share_inside_planes). Measured: 12 % of its model inside the table; the
+  // right pitcher's 0.
+#ifdef VIEWPOSE_SANITIZER_BUILD
+  GTEST_SKIP() << "skipped under the sanitizers: real frames against a database take minutes there";
+#endif
+  VIEWPOSE_REQUIRE_SHARED_DATA();
+  const BopDataset ds = open_bop_dataset(test::shared_data() / "ycbv_real_dev", "test", {"models"});
+  const ViewDatabase db = ycbv_dev_database(ds, {11});
+  const BopImage* image = find_image(ds, 14, 2);
+  ASSERT_NE(image, nullptr);
+  const BopFrame bf = load_bop_frame(*image);
+  const Frame frame = frame_from_depth(bf.depth, bf.K);
+  const Recognition r = Recognizer(db).recognize(frame);
+  EXPECT_EQ(r.detections.size(), 1u);
+  EXPECT_EQ(ids_of(right_detections(r, db, *image)), std::set<int>{11});
+  EXPECT_EQ(r.dropped_inside_planes, 1u);
+  // Without the rule the phantom stands (the test's reason to exist).
+  RecognizerOptions keep_all;
+  keep_all.accept.max_share_inside_planes = 1;
+  const Recognition unfiltered = Recognizer(db, keep_all).recognize(frame);
+  EXPECT_EQ(unfiltered.detections.size(), 2u);
+  EXPECT_EQ(unfiltered.dropped_inside_planes, 0u);
+}
+
 TEST(RealData, AScannedMilkCartonIsFoundInTheKinectSceneWithinThreeMillimetres) {
   // The thesis's other way to fill a database: a view scanned with the sensor. milk.pcd is the
   // carton's partial model (its frame is the capture's); the scene holds it among other cartons
