@@ -294,15 +294,16 @@ Recognition Recognizer::recognize(const Frame& frame) const {
 
 void Recognizer::drop_inside_planes(std::span<const Plane> planes, const Frame& frame, Recognition& out) const {
   const auto t = Clock::now();
-  const ObservedPlanes observed(planes, frame.cloud, frame.K);
+  std::vector<Eigen::Vector4f> coefficients;
+  for (const Plane& plane : planes) coefficients.push_back(plane.coefficients);
   const std::size_t before = out.detections.size();
   std::erase_if(out.detections, [&](const Detection& d) {
     // Beyond the plane's own inlier band and what verification tolerates at the object's depth
     // (as stand_on_resting_planes judges touching).
     const float margin_m = options_.segment.planes.distance_threshold_m +
                            depth_tolerance(static_cast<float>(d.T_camera_object.translation().z()), options_.verify);
-    const double share = observed.share_inside(db_.objects[d.object_index].model_points, d.T_camera_object, margin_m);
-    return share > options_.accept.max_share_inside_planes;
+    return share_inside_planes(coefficients, frame.depth, frame.K, db_.objects[d.object_index].model_points, d.T_camera_object, margin_m) >
+           options_.accept.max_share_inside_planes;
   });
   out.dropped_inside_planes += before - out.detections.size();
   out.times.verify_ms += ms_since(t);

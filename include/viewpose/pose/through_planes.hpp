@@ -6,37 +6,22 @@
 // way the object can be. (Real YCB-V 0014, with only the pitcher in the database: the pitcher
 // fitted to the master chef can, its handle and spout in the table, every test of verification
 // passed.)
-#include <cstdint>
 #include <span>
-#include <vector>
 
 #include "viewpose/core/camera.hpp"
-#include "viewpose/core/point_cloud.hpp"
+#include "viewpose/core/depth_image.hpp"
 #include "viewpose/core/transform.hpp"
-#include "viewpose/segment/planes.hpp"
 
 namespace viewpose {
 
-/// Where in the image each removed plane was seen, in cells of `cell_px` pixels: the planes'
-/// inliers (indices into `frame`, as Segmentation::planes holds them) projected with K.
-class ObservedPlanes {
- public:
-  ObservedPlanes(std::span<const Plane> planes, const PointCloud& frame, const CameraIntrinsics& K, int cell_px = 4);
-
-  /// The share of `model_points` (object frame) that, posed at `T_camera_object`, lie more than
-  /// `margin_m` behind a plane where the camera saw that plane: straight above them (their foot on
-  /// the plane falls in a cell where it was seen). Only planes the model also lies in front of, by
-  /// more than `margin_m`, count: a model wholly behind one is under it (a table, a shelf's board),
-  /// seen past its edge. Of the planes, the largest share; 0 without planes or points.
-  double share_inside(std::span<const Eigen::Vector3f> model_points, const Transform& T_camera_object, float margin_m) const;
-
-  bool empty() const { return planes_.empty(); }
-
- private:
-  std::vector<Eigen::Vector4f> planes_;  // n.p + d = 0, n facing the camera
-  CameraIntrinsics K_;
-  int cell_px_, cols_ = 0, rows_ = 0;
-  std::vector<std::uint8_t> seen_;  // per cell: the plane's index + 1 (0: none; the first plane's where two were)
-};
+/// The share of `model_points` (object frame) that, posed at `T_camera_object`, lie more than
+/// `margin_m` behind one of `planes` (n.p + d = 0 in the camera frame, unit n facing the camera,
+/// as the segmentation removes them) where the camera saw that plane straight above them: the
+/// depth measured at their foot on the plane lies on the plane, within `margin_m`. Only planes the
+/// model also lies in front of, by more than `margin_m`, count: a model wholly behind one is under
+/// a table or a shelf's board, seen past its edge. Of the planes, the largest share; 0 without
+/// planes or points. Each point is looked at once per plane: no cost per frame.
+double share_inside_planes(std::span<const Eigen::Vector4f> planes, const DepthImage& depth, const CameraIntrinsics& K,
+                           std::span<const Eigen::Vector3f> model_points, const Transform& T_camera_object, float margin_m);
 
 }  // namespace viewpose
