@@ -72,7 +72,8 @@ def write_rooms(w, rooms, distances):
       f"{a['false_positives'] / max(len(s['details']), 1):.1f} |\n")
     w(f"Time per frame {results_real.times_cell(s['time_ms'])} (median / p95 / max).\n")
     if a["false_positives"]:
-        w(f"The room alone brings {a['false_positives']} false positives in {len(s['details'])} frames: the jug fitted to")
+        noun = "false positive" if a["false_positives"] == 1 else "false positives"
+        w(f"The room alone brings {a['false_positives']} {noun} in {len(s['details'])} frames: the jug fitted to")
         w("what stands in the room (unknown objects, furniture, walls), each a pose that verification could not tell")
         w("from a right one at the sensor's noise there.\n")
 
