@@ -133,6 +133,9 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
   if (!(options_.split.join_gap_m >= 0 && options_.split.join_gap_m <= 1)) {
     throw Error(fmt::format("recognize: the gap between pieces joined is {} m, not within 0-1 m", options_.split.join_gap_m));
   }
+  if (!(options_.accept.max_share_inside_planes >= 0 && options_.accept.max_share_inside_planes <= 1)) {
+    throw Error(fmt::format("recognize: the share of a model allowed inside a plane is {}, not within 0-1", options_.accept.max_share_inside_planes));
+  }
   if (db.objects.size() <= options_.run.prepare_objects_up_to) {
     // Each object on a thread.
     const auto each_object = [&](const auto& prepare) {
@@ -338,6 +341,7 @@ void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   out.split_clusters += part.split_clusters;
   out.regions += part.regions;
   out.dropped_as_explained += part.dropped_as_explained;
+  out.dropped_inside_planes += part.dropped_inside_planes;
   out.joined_regions += part.joined_regions;
   out.cut_short = out.cut_short || part.cut_short;
 }

@@ -102,6 +102,13 @@ TEST(Recognize, OptionsAreGivenByStageAndTheDatabaseFixesTheVoxelSize) {
   RecognizerOptions coarser;
   coarser.segment.voxel_m = 2 * jug_db().params.voxel_m;
   EXPECT_THROW(Recognizer(jug_db(), coarser), Error);
+  // A share of a model inside a plane outside 0-1 (a negative one would drop every detection on a
+  // table; NaN would turn the test off unsaid).
+  for (const double share : {-0.1, 1.5, std::nan("")}) {
+    RecognizerOptions bad;
+    bad.accept.max_share_inside_planes = share;
+    EXPECT_THROW(Recognizer(jug_db(), bad), Error) << share;
+  }
 }
 
 TEST(Recognize, ADeadlineCutsTheFrameShortAndSaysSo) {
@@ -164,6 +171,7 @@ void expect_same_recognition(const Recognition& a, const Recognition& b) {
   EXPECT_EQ(a.screened_out, b.screened_out);
   EXPECT_EQ(a.split_clusters, b.split_clusters);
   EXPECT_EQ(a.dropped_as_explained, b.dropped_as_explained);
+  EXPECT_EQ(a.dropped_inside_planes, b.dropped_inside_planes);
   EXPECT_EQ(a.joined_regions, b.joined_regions);
   ASSERT_EQ(a.detections.size(), b.detections.size());
   for (std::size_t i = 0; i < a.detections.size(); ++i) {

@@ -20,7 +20,11 @@ namespace viewpose {
 /// depth measured at their foot on the plane lies on the plane, within `margin_m`. Only planes the
 /// model also lies in front of, by more than `margin_m`, count: a model wholly behind one is under
 /// a table or a shelf's board, seen past its edge. Of the planes, the largest share; 0 without
-/// planes or points. Each point is looked at once per plane: no cost per frame.
+/// planes or points. Nothing is prepared per frame: each point is projected once per plane.
+/// The planes are unbounded: an object taller than a riser beside it crosses the riser's plane, and
+/// where its points' feet fall the camera may see its own front at that height, which this counts
+/// as the plane. (Excluding measured points on the model's own surface, even within 5 mm, also
+/// excluded the phantoms' feet: they lie along the surface the phantom was fitted to.)
 double share_inside_planes(std::span<const Eigen::Vector4f> planes, const DepthImage& depth, const CameraIntrinsics& K,
                            std::span<const Eigen::Vector3f> model_points, const Transform& T_camera_object, float margin_m);
 

@@ -167,7 +167,9 @@ struct AcceptOptions {
   /// stands in a table (1: none dropped). Measured: every right detection on the real and simulated
   /// sets 0 (of 200); three false positives that passed every test of verification 0.03-0.12 (a
   /// box taken for another in a real mOSD frame, the pitcher fitted to a can in real YCB-V, the jug
-  /// fitted to a can at the seed room's image edge).
+  /// fitted to a can at the seed room's image edge). Judged once the frame's search is done: a
+  /// region whose first passing pose is dropped does not go on to its next (none of those three had
+  /// a right one). Within 0-1.
   double max_share_inside_planes = 0.02;
   /// Called in order, on the calling thread, for every hypothesis that passed verification's bounds,
   /// before the confidence threshold: what the confidence model is fit on (viewpose bop --hypotheses).
