@@ -23,8 +23,10 @@ namespace viewpose {
 /// planes or points. Nothing is prepared per frame: each point is projected once per plane.
 /// The planes are unbounded: an object taller than a riser beside it crosses the riser's plane, and
 /// where its points' feet fall the camera may see its own front at that height, which this counts
-/// as the plane. (Excluding measured points on the model's own surface, even within 5 mm, also
-/// excluded the phantoms' feet: they lie along the surface the phantom was fitted to.)
+/// as the plane. Removed planes are at least 0.3 m across (PlaneOptions::min_extent_m): a second
+/// table or a shelf, not a box. (Excluding measured points on the model's own surface, even within
+/// 5 mm, also excluded the phantoms' feet: they lie along the surface the phantom was fitted to;
+/// asking the measured surface there to face as the plane does kept a third to a tenth of them.)
 double share_inside_planes(std::span<const Eigen::Vector4f> planes, const DepthImage& depth, const CameraIntrinsics& K,
                            std::span<const Eigen::Vector3f> model_points, const Transform& T_camera_object, float margin_m);
 
