@@ -399,9 +399,9 @@ void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, 
     }
   }
   // Nothing passed: the region may be objects touching each other. Try its convex parts, largest
-  // first (a pile of a few objects: SplitOptions::max_size_factor).
+  // first (a pile of a few objects: SplitOptions::max_size_factor, min_size_m).
   if (!options_.split.enabled || depth >= options_.split.max_depth ||
-      size > options_.split.max_size_factor * largest_diameter_m_ || out_of_time(out)) {
+      size > std::max(options_.split.min_size_m, options_.split.max_size_factor * largest_diameter_m_) || out_of_time(out)) {
     if (partial && options_.split.enabled && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
     return;
   }

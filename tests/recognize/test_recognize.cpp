@@ -1025,7 +1025,7 @@ TEST(RealData, APileOfThreeSmallObjectsIsSplitWhenOnlyTheyAreInTheDatabase) {
   // YCB-Video 0000 (ycbv_real_dev): the gelatin box, the mug and the foam brick touch, one cluster
   // 0.28 m across. With only these three in the database (the largest 0.125 m) a region more than
   // twice as wide as the largest object was not split, and the frames where they touch gave
-  // nothing (2 of 8 frames found them). Now a pile of a few (SplitOptions::max_size_factor).
+  // nothing (2 of 8 frames found them). Now regions up to SplitOptions::min_size_m are split.
   // Measured: all three in each frame.
 #ifdef VIEWPOSE_SANITIZER_BUILD
   GTEST_SKIP() << "skipped under the sanitizers: real frames against a database take minutes there";
