@@ -10,14 +10,13 @@ double share_inside_planes(std::span<const Eigen::Vector4f> planes, const DepthI
   if (planes.empty() || model_points.empty() || depth.width != K.width || depth.height != K.height || !(K.fx > 0) || !(K.fy > 0)) return 0;
   const Eigen::Matrix3f R = T_camera_object.linear().cast<float>();
   const Eigen::Vector3f t = T_camera_object.translation().cast<float>();
-  std::size_t worst = 0, counted = 0;
+  const auto counted = static_cast<std::size_t>(std::count_if(model_points.begin(), model_points.end(), [](const Eigen::Vector3f& m) { return m.allFinite(); }));
+  std::size_t worst = 0;
   for (const Eigen::Vector4f& plane : planes) {
     const Eigen::Vector3f n = plane.head<3>();
     std::size_t inside = 0, in_front = 0;
-    counted = 0;
     for (const Eigen::Vector3f& m : model_points) {
       if (!m.allFinite()) continue;
-      ++counted;
       const Eigen::Vector3f p = R * m + t;
       const float s = n.dot(p) + plane.w();  // > 0: the camera's side
       if (s > margin_m) {

@@ -285,37 +285,33 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     for (Recognition& part : parts) merge_part(std::move(part), out);
   }
   if (options_.split.enabled && options_.split.join_gap_m > 0 && !out_of_time(out)) join_fragments(seg, frame, out);
-  if (options_.accept.max_share_inside_planes < 1 && !seg.planes.empty() && !out.detections.empty()) {
-    drop_inside_planes(seg.planes, frame, out);
-  }
+  std::vector<Eigen::Vector4f> planes;
+  for (const Plane& plane : seg.planes) planes.push_back(plane.coefficients);
+  if (options_.accept.max_share_inside_planes < 1 && !planes.empty() && !out.detections.empty()) drop_inside_planes(planes, frame, out);
   // (Before the claims: they are judged at the poses reported.)
-  if (options_.accept.canonical_poses && !seg.planes.empty()) stand_on_resting_planes(seg.planes, out);
+  if (options_.accept.canonical_poses && !planes.empty()) stand_on_resting_planes(planes, out);
   if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
   out.times.total_ms = ms_since(start);
   return out;
 }
 
-void Recognizer::drop_inside_planes(std::span<const Plane> planes, const Frame& frame, Recognition& out) const {
+void Recognizer::drop_inside_planes(std::span<const Eigen::Vector4f> planes, const Frame& frame, Recognition& out) const {
   const auto t = Clock::now();
-  std::vector<Eigen::Vector4f> coefficients;
-  for (const Plane& plane : planes) coefficients.push_back(plane.coefficients);
   const std::size_t before = out.detections.size();
   std::erase_if(out.detections, [&](const Detection& d) {
     // Beyond the plane's own inlier band and what verification tolerates at the object's depth
     // (as stand_on_resting_planes judges touching).
     const float margin_m = options_.segment.planes.distance_threshold_m +
                            depth_tolerance(static_cast<float>(d.T_camera_object.translation().z()), options_.verify);
-    return share_inside_planes(coefficients, frame.depth, frame.K, db_.objects[d.object_index].model_points, d.T_camera_object, margin_m) >
+    return share_inside_planes(planes, frame.depth, frame.K, db_.objects[d.object_index].model_points, d.T_camera_object, margin_m) >
            options_.accept.max_share_inside_planes;
   });
   out.dropped_inside_planes += before - out.detections.size();
   out.times.verify_ms += ms_since(t);
 }
 
-void Recognizer::stand_on_resting_planes(std::span<const Plane> planes, Recognition& out) const {
+void Recognizer::stand_on_resting_planes(std::span<const Eigen::Vector4f> planes, Recognition& out) const {
   const auto t = Clock::now();
-  std::vector<Eigen::Vector4f> coefficients;
-  for (const Plane& plane : planes) coefficients.push_back(plane.coefficients);
   for (Detection& d : out.detections) {
     const DatabaseObject& object = db_.objects[d.object_index];
     if (object.symmetries.empty()) continue;
@@ -324,7 +320,7 @@ void Recognizer::stand_on_resting_planes(std::span<const Plane> planes, Recognit
     const float touch_m = options_.segment.planes.distance_threshold_m +
                           depth_tolerance(static_cast<float>(d.T_camera_object.translation().z()), options_.verify);
     const std::vector<Eigen::Vector3d>& standing_axes = prepared(d.object_index).standing_axes;
-    if (const std::optional<Eigen::Vector3d> up = resting_plane_up(coefficients, object.model_points, d.T_camera_object, standing_axes, touch_m)) {
+    if (const std::optional<Eigen::Vector3d> up = resting_plane_up(planes, object.model_points, d.T_camera_object, standing_axes, touch_m)) {
       d.T_camera_object = canonical_pose(d.T_camera_object, object.symmetries, *up);
     }
   }
