@@ -287,7 +287,7 @@ Recognition Recognizer::recognize(const Frame& frame) const {
   if (options_.split.enabled && options_.split.join_gap_m > 0 && !out_of_time(out)) join_fragments(seg, frame, out);
   std::vector<Eigen::Vector4f> planes;
   for (const Plane& plane : seg.planes) planes.push_back(plane.coefficients);
-  if (options_.accept.max_share_inside_planes < 1 && !planes.empty() && !out.detections.empty()) drop_inside_planes(planes, frame, out);
+  if (options_.accept.max_share_inside_planes < 1 && !planes.empty() && !out.detections.empty()) drop_inside_planes(seg.planes, frame, out);
   // (Before the claims: they are judged at the poses reported.)
   if (options_.accept.canonical_poses && !planes.empty()) stand_on_resting_planes(planes, out);
   if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
@@ -295,7 +295,7 @@ Recognition Recognizer::recognize(const Frame& frame) const {
   return out;
 }
 
-void Recognizer::drop_inside_planes(std::span<const Eigen::Vector4f> planes, const Frame& frame, Recognition& out) const {
+void Recognizer::drop_inside_planes(std::span<const Plane> planes, const Frame& frame, Recognition& out) const {
   const auto t = Clock::now();
   const std::size_t before = out.detections.size();
   std::erase_if(out.detections, [&](const Detection& d) {

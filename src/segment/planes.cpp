@@ -50,6 +50,18 @@ Eigen::Vector4f refit(std::span<const Eigen::Vector3f> points, std::span<const s
 
 }  // namespace
 
+bool PlanePatch::covers(const Eigen::Vector3f& p) const {
+  if (covered.empty() || !(cell_m > 0)) return false;
+  const float x = (axis_u.dot(p) - origin.x()) / cell_m, y = (axis_v.dot(p) - origin.y()) / cell_m;
+  if (!(x > -1 && y > -1 && x < static_cast<float>(width) + 1 && y < static_cast<float>(height) + 1)) return false;  // NaN too
+  const int cx = static_cast<int>(std::floor(x)), cy = static_cast<int>(std::floor(y));
+  for (int yy = std::max(0, cy - 1); yy <= std::min(height - 1, cy + 1); ++yy)
+    for (int xx = std::max(0, cx - 1); xx <= std::min(width - 1, cx + 1); ++xx) {
+      if (covered[static_cast<std::size_t>(yy) * static_cast<std::size_t>(width) + static_cast<std::size_t>(xx)]) return true;
+    }
+  return false;
+}
+
 Plane fit_plane(std::span<const Eigen::Vector3f> points, std::span<const std::uint32_t> indices, const PlaneOptions& o) {
   Plane best;
   if (indices.size() < 3) return best;
@@ -103,11 +115,13 @@ struct Patch {
   std::size_t cells = 0;
   float cell_m = 0;
   float extent_m = 0;  ///< smaller in-plane spread of the cells (2nd to 98th percentile)
+  PlanePatch seen;     ///< the cells of every component of at least `min_cells`
 };
 
 // The largest connected patch of a plane's inliers: the inliers binned into square cells of the
 // plane's own 2-D coordinates (a dense grid over their extent), cells joined to their 8 neighbours.
-Patch largest_patch(std::span<const Eigen::Vector3f> points, const Plane& plane, float cell) {
+// Every component of at least `min_cells` cells (of the cell asked for) is kept in `seen`.
+Patch largest_patch(std::span<const Eigen::Vector3f> points, const Plane& plane, float cell, double min_cells) {
   Patch best;
   if (plane.inliers.empty()) return best;
   const Eigen::Vector3f n = plane.coefficients.head<3>();
@@ -122,7 +136,9 @@ Patch largest_patch(std::span<const Eigen::Vector3f> points, const Plane& plane,
   // At most 4 M cells: a plane wider than 20 m (nothing a depth camera sees) gets coarser cells.
   constexpr double kMaxCells = 4e6;
   const Eigen::Vector2f span = hi - lo;
+  const float cell_asked = cell;
   cell = std::max(cell, static_cast<float>(std::sqrt(static_cast<double>(span.x()) * span.y() / kMaxCells)));
+  min_cells *= static_cast<double>(cell_asked) * cell_asked / (static_cast<double>(cell) * cell);
   const int W = static_cast<int>(span.x() / cell) + 1, H = static_cast<int>(span.y() / cell) + 1;
   std::vector<std::uint32_t> cell_of(plane.inliers.size());
   std::vector<std::int32_t> label(static_cast<std::size_t>(W) * static_cast<std::size_t>(H), -1);  // -1 empty, -2 occupied
@@ -180,6 +196,17 @@ Patch largest_patch(std::span<const Eigen::Vector3f> points, const Plane& plane,
   for (std::size_t k = 0; k < plane.inliers.size(); ++k) {
     if (label[cell_of[k]] == largest) best.points.push_back(plane.inliers[k]);
   }
+  PlanePatch& seen = best.seen;
+  seen.axis_u = a;
+  seen.axis_v = b;
+  seen.origin = lo;
+  seen.cell_m = cell;
+  seen.width = W;
+  seen.height = H;
+  seen.covered.resize(label.size());
+  for (std::size_t j = 0; j < label.size(); ++j) {
+    seen.covered[j] = label[j] >= 0 && (label[j] == largest || static_cast<double>(size[static_cast<std::size_t>(label[j])]) >= min_cells);
+  }
   return best;  // ascending, as the inliers are
 }
 
@@ -229,12 +256,13 @@ PlaneRemoval remove_large_planes(const PointCloud& cloud, const PlaneOptions& o)
     if (static_cast<double>(plane.inliers.size()) < o.min_area_m2 / (patch_cell * patch_cell) || plane.inliers.size() < 3) break;
     // Large means one connected patch spans min_extent in both directions: a table or a wall does;
     // coplanar faces of boxes (apart, or in a row) and object faces do not.
-    const Patch patch = largest_patch(cloud.points, plane, patch_cell);
+    Patch patch = largest_patch(cloud.points, plane, patch_cell, o.min_area_m2 / (patch_cell * patch_cell));
     const float patch_extent = patch.extent_m;
     pool = minus(pool, plane.inliers);
     plane.area_m2 = static_cast<float>(patch.cells) * patch.cell_m * patch.cell_m;
     if (plane.area_m2 < o.min_area_m2 || patch_extent < o.min_extent_m) continue;
     plane.extent_m = patch_extent;
+    plane.patch = std::move(patch.seen);
     out.removed.push_back(std::move(plane));
   }
   // Every point, not just the sample, is tested against the planes found: in one pass, split

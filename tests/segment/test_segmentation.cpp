@@ -1,5 +1,6 @@
 #include <map>
 #include <numbers>
+#include <limits>
 #include <random>
 #include <set>
 #include <numeric>
@@ -79,6 +80,28 @@ TEST(Planes, FindsTheTableAtItsDistanceAndNormalAndKeepsTheBoxes) {
   EXPECT_GT(p.coefficients.head<3>().dot(-Eigen::Vector3f(0, 0, 1.2f)), 0) << "normal faces the camera";
   EXPECT_GT(p.inliers.size(), table * 98 / 100);
   EXPECT_GT(r.remaining.size(), (pts.size() - table) * 9 / 10);  // the boxes stay
+}
+
+TEST(Planes, ThePatchCoversWhereThePlaneWasSeenAndNotItsEquationsEveryPoint) {
+  // The table of the test above with a hole 0.4 m square cut from its middle: the plane's patch
+  // covers the table, not the hole and not the plane's continuation past the table's edge.
+  std::vector<Eigen::Vector3f> pts;
+  for (const Eigen::Vector3f& p : table_points()) {
+    if (std::abs(p.x()) > 0.2f || std::abs(p.y()) > 0.2f) pts.push_back(p);
+  }
+  const PlaneRemoval r = remove_large_planes(PointCloud::from_points(pts));
+  ASSERT_EQ(r.removed.size(), 1u);
+  const PlanePatch& patch = r.removed[0].patch;
+  const auto on_table = [](float x, float y) { return Eigen::Vector3f(x, y, 1.2f - 0.5f * y); };
+  EXPECT_TRUE(patch.covers(on_table(0.5f, 0.5f)));
+  EXPECT_TRUE(patch.covers(on_table(-0.7f, 0.0f)));
+  EXPECT_TRUE(patch.covers(on_table(0.21f, 0.0f)));  // the hole's rim
+  EXPECT_FALSE(patch.covers(on_table(0.0f, 0.0f)));  // the hole
+  EXPECT_FALSE(patch.covers(on_table(0.15f, -0.1f)));
+  EXPECT_FALSE(patch.covers(on_table(1.0f, 0.0f)));  // past the edge, on the plane's equation
+  EXPECT_FALSE(patch.covers(on_table(0.0f, -0.85f)));
+  EXPECT_FALSE(patch.covers(Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN())));
+  EXPECT_FALSE(PlanePatch{}.covers(on_table(0.5f, 0.5f)));  // a plane of fit_plane, seen nowhere known
 }
 
 TEST(Segmentation, WhatLiesPastTheSensorsUsefulRangeFormsNoCluster) {

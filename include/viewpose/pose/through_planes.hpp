@@ -11,23 +11,24 @@
 #include "viewpose/core/camera.hpp"
 #include "viewpose/core/depth_image.hpp"
 #include "viewpose/core/transform.hpp"
+#include "viewpose/segment/planes.hpp"
 
 namespace viewpose {
 
 /// The share of `model_points` (object frame) that, posed at `T_camera_object`, lie more than
 /// `margin_m` behind one of `planes` (n.p + d = 0 in the camera frame, unit n facing the camera,
-/// as the segmentation removes them) where the camera saw that plane straight above them: the
-/// depth measured at their foot on the plane lies on the plane, within `margin_m`. Only planes the
-/// model also lies in front of, by more than `margin_m`, count: a model wholly behind one is under
-/// a table or a shelf's board, seen past its edge. Of the planes, the largest share; 0 without
-/// planes or points. Nothing is prepared per frame: each point is projected once per plane.
-/// The planes are unbounded: an object taller than a riser beside it crosses the riser's plane, and
-/// where its points' feet fall the camera may see its own front at that height, which this counts
-/// as the plane. Removed planes are at least 0.3 m across (PlaneOptions::min_extent_m): a second
-/// table or a shelf, not a box. (Excluding measured points on the model's own surface, even within
-/// 5 mm, also excluded the phantoms' feet: they lie along the surface the phantom was fitted to;
-/// asking the measured surface there to face as the plane does kept a third to a tenth of them.)
-double share_inside_planes(std::span<const Eigen::Vector4f> planes, const DepthImage& depth, const CameraIntrinsics& K,
+/// as the segmentation removes them) where that plane was seen straight above them: their foot on
+/// the plane lies in the plane's patch (Plane::patch, where the segmentation found it), and the
+/// depth measured there lies on the plane, within `margin_m`. Only planes the model also lies in
+/// front of, by more than `margin_m`, count: a model wholly behind one is under a table or a
+/// shelf's board, seen past its edge. Of the planes, the largest share; 0 without planes, patches
+/// or points. Nothing is prepared per frame: each point is projected once per plane.
+/// The patch, not the unbounded plane: an object taller than a riser beside it (a box's top, a
+/// second table) crosses the riser's plane, and where its lower points' feet fall the camera sees
+/// the object's own front at the riser's height, on the plane but not on the riser. (Excluding
+/// instead the measured points on the model's own surface, even within 5 mm, also excluded the
+/// phantoms' feet: they lie along the surface the phantom was fitted to.)
+double share_inside_planes(std::span<const Plane> planes, const DepthImage& depth, const CameraIntrinsics& K,
                            std::span<const Eigen::Vector3f> model_points, const Transform& T_camera_object, float margin_m);
 
 }  // namespace viewpose

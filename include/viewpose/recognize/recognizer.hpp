@@ -544,7 +544,7 @@ class Recognizer {
   // Timed as verification.
   void stand_on_resting_planes(std::span<const Eigen::Vector4f> planes, Recognition& out) const;
   // Drops the detections whose models lie inside a removed plane (AcceptOptions::max_share_inside_planes).
-  void drop_inside_planes(std::span<const Eigen::Vector4f> planes, const Frame& frame, Recognition& out) const;
+  void drop_inside_planes(std::span<const Plane> planes, const Frame& frame, Recognition& out) const;
   // A cluster's own record (RunOptions::parallel_clusters) added to the frame's: its detections
   // after those before, its counts and stage times summed.
   static void merge_part(Recognition&& part, Recognition& out);

@@ -32,11 +32,29 @@ struct PlaneOptions {
   std::uint64_t seed = 1;
 };
 
+/// Where a plane was seen. Its equation is unbounded; a table ends at its edge, and the top of a box
+/// beside an object is not under the object. The cells (of the inlier band's width, in the plane's
+/// own 2-D coordinates) that its large connected patches cover, among the points it was searched
+/// in: a patch counts when it covers PlaneOptions::min_area_m2, as the largest must for the plane
+/// to be removed at all.
+struct PlanePatch {
+  Eigen::Vector3f axis_u = Eigen::Vector3f::Zero(), axis_v = Eigen::Vector3f::Zero();  ///< in-plane unit axes
+  Eigen::Vector2f origin = Eigen::Vector2f::Zero();  ///< the first cell's corner, (axis_u.p, axis_v.p)
+  float cell_m = 0;
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> covered;  ///< width x height, row after row; 1 where a large patch is
+
+  /// Whether `p`, on or near the plane, falls in a covered cell or beside one (its 8 neighbours:
+  /// the sample's rows lie a few cells apart on a far table seen at a slant). False for an empty patch.
+  bool covers(const Eigen::Vector3f& p) const;
+};
+
 struct Plane {
   Eigen::Vector4f coefficients = Eigen::Vector4f::Zero();  ///< unit normal n and d, n.p + d = 0; n faces the origin
   std::vector<std::uint32_t> inliers;  ///< every point of the cloud within the band, ascending
   float extent_m = 0;  ///< smaller in-plane spread (2nd to 98th percentile) of the largest connected patch
   float area_m2 = 0;   ///< area of the largest connected patch
+  PlanePatch patch;    ///< where it was seen (remove_large_planes fills it; fit_plane does not)
 };
 
 /// The best plane among the points `indices` of `points` (RANSAC, then a least-squares refit on
