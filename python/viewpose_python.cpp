@@ -172,6 +172,12 @@ PYBIND11_MODULE(viewpose, m) {
       .def_readonly("screened", &Recognition::screened)
       .def_readonly("screened_out", &Recognition::screened_out)
       .def_readonly("regions", &Recognition::regions)
+      .def_readonly("split_clusters", &Recognition::split_clusters, "Clusters in which nothing passed, tried again in convex parts")
+      .def_readonly("joined_regions", &Recognition::joined_regions, "Pairs of unexplained pieces searched as one region")
+      .def_readonly("dropped_as_explained", &Recognition::dropped_as_explained,
+                    "Detections dropped because a more confident one explains the same pixels")
+      .def_readonly("dropped_inside_planes", &Recognition::dropped_inside_planes,
+                    "Detections dropped because their model would lie inside a removed plane (a table)")
       .def_property_readonly("times_ms",
                              [](const Recognition& r) {
                                const StageTimes& t = r.times;

@@ -78,6 +78,18 @@ def test_the_poses_are_the_ground_truths(scene):
         assert r.times_ms["total"] > 0 and not r.cut_short
 
 
+def test_the_counters_are_the_jsons(scene):
+    rec = viewpose.Recognizer(viewpose.ViewDatabase.load(scene["db"]))
+    png, _ = scene["frames"][0]
+    r = rec.recognize(viewpose.read_depth_png(png), K=scene["K"], depth_scale=scene["scale"])
+    j = json.loads(r.to_json(with_times=False))
+    counters = ("clusters", "hypotheses", "repeats", "screened", "screened_out", "regions", "split_clusters",
+                "joined_regions", "dropped_as_explained", "dropped_inside_planes")
+    for name in counters:
+        assert getattr(r, name) == j[name], name
+    assert r.clusters >= 1 and r.hypotheses >= 1
+
+
 def test_metres_as_float_give_the_same_as_millimetres_with_a_scale(scene):
     rec = viewpose.Recognizer(viewpose.ViewDatabase.load(scene["db"]))
     png, _ = scene["frames"][0]
