@@ -177,7 +177,7 @@ PYBIND11_MODULE(viewpose, m) {
       .def_readonly("dropped_as_explained", &Recognition::dropped_as_explained,
                     "Detections dropped because a more confident one explains the same pixels")
       .def_readonly("dropped_inside_planes", &Recognition::dropped_inside_planes,
-                    "Detections dropped because their model would lie inside a removed plane (a table)")
+                    "Poses refused, or detections dropped, because their model would lie inside a removed plane (a table)")
       .def_property_readonly("times_ms",
                              [](const Recognition& r) {
                                const StageTimes& t = r.times;

@@ -254,13 +254,14 @@ Recognition Recognizer::recognize(const Frame& frame) const {
   out.times.downsample_ms = seg_times.downsample_ms;
   out.times.segment_ms = seg_times.planes_ms + seg_times.clusters_ms;
   out.clusters = seg.clusters.size();
+  const FrameAndPlanes seen{frame.depth, frame.K, seg.planes};
   const std::size_t n = seg.clusters.size();
   const bool side_by_side = options_.run.parallel_clusters && options_.run.parallel_hypotheses && n > 1 &&
                             !options_.accept.on_verified && thread_count() > 1;
   if (!side_by_side) {
     for (const Cluster& cluster : seg.clusters) {
       if (out_of_time(out)) break;
-      recognize_region(cluster_points(seg.points, cluster), frame, out, 0);
+      recognize_region(cluster_points(seg.points, cluster), seen, out, 0);
     }
   } else {
     // Each cluster on its own record, largest first (the longest searches start early), merged in
@@ -274,38 +275,41 @@ Recognition Recognizer::recognize(const Frame& frame) const {
 #pragma omp parallel
 #pragma omp single
     for (const std::size_t c : order) {
-#pragma omp task firstprivate(c) shared(parts, seg, frame, start, failed)
+#pragma omp task firstprivate(c) shared(parts, seg, seen, start, failed)
       failed.run(static_cast<std::ptrdiff_t>(c), [&] {
         Recognition& part = parts[c];
         part.started = start;
-        if (!out_of_time(part)) recognize_region(cluster_points(seg.points, seg.clusters[c]), frame, part, 0);
+        if (!out_of_time(part)) recognize_region(cluster_points(seg.points, seg.clusters[c]), seen, part, 0);
       });
     }
     failed.rethrow();
     for (Recognition& part : parts) merge_part(std::move(part), out);
   }
-  if (options_.split.enabled && options_.split.join_gap_m > 0 && !out_of_time(out)) join_fragments(seg, frame, out);
+  if (options_.split.enabled && options_.split.join_gap_m > 0 && !out_of_time(out)) join_fragments(seg, seen, out);
   std::vector<Eigen::Vector4f> planes;
   for (const Plane& plane : seg.planes) planes.push_back(plane.coefficients);
-  if (options_.accept.max_share_inside_planes < 1 && !planes.empty() && !out.detections.empty()) drop_inside_planes(seg.planes, frame, out);
+  if (!out.detections.empty()) drop_inside_planes(seen, out);
   // (Before the claims: they are judged at the poses reported.)
   if (options_.accept.canonical_poses && !planes.empty()) stand_on_resting_planes(planes, out);
-  if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(frame, out);
+  if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(seen, out);
   out.times.total_ms = ms_since(start);
   return out;
 }
 
-void Recognizer::drop_inside_planes(std::span<const Plane> planes, const Frame& frame, Recognition& out) const {
+bool Recognizer::inside_planes(std::uint32_t object, const Transform& T_camera_object, const FrameAndPlanes& frame) const {
+  if (!(options_.accept.max_share_inside_planes < 1) || frame.planes.empty()) return false;
+  // Beyond the plane's own inlier band and what verification tolerates at the object's depth
+  // (as stand_on_resting_planes judges touching).
+  const float margin_m = options_.segment.planes.distance_threshold_m +
+                         depth_tolerance(static_cast<float>(T_camera_object.translation().z()), options_.verify);
+  return share_inside_planes(frame.planes, frame.depth, frame.K, db_.objects[object].model_points, T_camera_object, margin_m) >
+         options_.accept.max_share_inside_planes;
+}
+
+void Recognizer::drop_inside_planes(const FrameAndPlanes& frame, Recognition& out) const {
   const auto t = Clock::now();
   const std::size_t before = out.detections.size();
-  std::erase_if(out.detections, [&](const Detection& d) {
-    // Beyond the plane's own inlier band and what verification tolerates at the object's depth
-    // (as stand_on_resting_planes judges touching).
-    const float margin_m = options_.segment.planes.distance_threshold_m +
-                           depth_tolerance(static_cast<float>(d.T_camera_object.translation().z()), options_.verify);
-    return share_inside_planes(planes, frame.depth, frame.K, db_.objects[d.object_index].model_points, d.T_camera_object, margin_m) >
-           options_.accept.max_share_inside_planes;
-  });
+  std::erase_if(out.detections, [&](const Detection& d) { return inside_planes(d.object_index, d.T_camera_object, frame); });
   out.dropped_inside_planes += before - out.detections.size();
   out.times.verify_ms += ms_since(t);
 }
@@ -342,7 +346,7 @@ void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   out.cut_short = out.cut_short || part.cut_short;
 }
 
-void Recognizer::resolve_scene(const Frame& frame, Recognition& out) const {
+void Recognizer::resolve_scene(const FrameAndPlanes& frame, Recognition& out) const {
   const auto t = Clock::now();
   std::vector<std::size_t> order(out.detections.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -370,7 +374,7 @@ void Recognizer::resolve_scene(const Frame& frame, Recognition& out) const {
   out.times.verify_ms += ms_since(t);
 }
 
-void Recognizer::recognize_region(const PointCloud& points, const Frame& frame, Recognition& out, int depth) const {
+void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth) const {
   // Anything found inside a split cluster stands on less evidence than an isolated cluster, and is
   // checked more strictly.
   const VerifyOptions part_verify = part_verify_options();
@@ -487,7 +491,7 @@ std::vector<Recognizer::Piece> Recognizer::unexplained_pieces(const Segmentation
   return pieces;
 }
 
-void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Recognition& out) const {
+void Recognizer::join_fragments(const Segmentation& seg, const FrameAndPlanes& frame, Recognition& out) const {
   const auto t = Clock::now();
   // Pieces of one object lie within its diameter (and the largest tolerance).
   const double widest = largest_diameter_m_ + options_.verify.max_tolerance_m;
@@ -548,7 +552,7 @@ void Recognizer::join_fragments(const Segmentation& seg, const Frame& frame, Rec
   }
 }
 
-void Recognizer::explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,
+void Recognizer::explain_jointly(const PointCloud& points, const Detection& partial, const FrameAndPlanes& frame, const VerifyOptions& verify,
                                  Recognition& out, int depth, bool votes) const {
   const auto t = Clock::now();
   std::vector<char> explained = explained_points(partial, points);
@@ -594,7 +598,7 @@ void Recognizer::explain_jointly(const PointCloud& points, const Detection& part
   }
 }
 
-void Recognizer::recognize_rest(const PointCloud& points, Detection detection, const Frame& frame, Recognition& out,
+void Recognizer::recognize_rest(const PointCloud& points, Detection detection, const FrameAndPlanes& frame, Recognition& out,
                                 int depth) const {
   // Explain the object's points away and start again on what is left: a smaller object touching it
   // (less of the cluster than verification lets go unexplained), or, in a split cluster, the other
@@ -646,8 +650,8 @@ std::vector<char> Recognizer::explained_points(const Detection& detection, const
 
 std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const Hypothesis> hypotheses,
                                                                std::span<const Eigen::Vector3f> icp_source,
-                                                               std::span<const Eigen::Vector3f> cluster, const Frame& frame,
-                                                               const VerifyOptions& verify, StageTimes& times,
+                                                               std::span<const Eigen::Vector3f> cluster, const FrameAndPlanes& frame,
+                                                               const VerifyOptions& verify, Recognition& record,
                                                                const std::vector<std::vector<Transform>>* refused) const {
   std::vector<Refined> out(hypotheses.size());
   const auto is_refused = [&](std::uint32_t object, const Transform& T) {
@@ -686,19 +690,26 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const H
     h.confidence = pose_confidence(h.v);
     if (options_.accept.on_verified) options_.accept.on_verified({hypotheses[k].object, h.T_camera_object, h.v, h.confidence});
     h.accepted = h.confidence >= options_.accept.min_confidence;
+    // No object stands inside a table: such a pose is not accepted, and the search goes on to the
+    // region's next (pose/through_planes.hpp).
+    if (h.accepted && inside_planes(hypotheses[k].object, h.T_camera_object, frame)) {
+      h.accepted = false;
+      h.inside_planes = true;
+      ++record.dropped_inside_planes;
+    }
   }
   // The wall time, shared between the two stages as their summed times are.
   const double wall = ms_since(start);
   double icp = 0, verified = 0;
   for (const Refined& h : out) icp += h.icp_ms, verified += h.verify_ms;
   if (icp + verified > 0) {
-    times.icp_ms += wall * icp / (icp + verified);
-    times.verify_ms += wall * verified / (icp + verified);
+    record.times.icp_ms += wall * icp / (icp + verified);
+    record.times.verify_ms += wall * verified / (icp + verified);
   }
   return out;
 }
 
-std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& points, const Frame& frame,
+std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& points, const FrameAndPlanes& frame,
                                                               const VerifyOptions& verify, Recognition& out) const {
   DescribeTimes dt;
   Region region;
@@ -773,7 +784,7 @@ void Recognizer::prescreen(Region& region, std::size_t from, Recognition& out) c
   out.times.icp_ms += ms_since(t);
 }
 
-bool Recognizer::refused_after_screen(const Region& region, const Candidate& c, const Frame& frame, Recognition& out) const {
+bool Recognizer::refused_after_screen(const Region& region, const Candidate& c, const FrameAndPlanes& frame, Recognition& out) const {
   // (The measurement that makes this safe: MatchOptions::prescreen.)
   if (!c.screened()) return false;
   const Transform& T_camera_object = region.screened_poses[c.screened_pose];
@@ -879,14 +890,14 @@ Detection Recognizer::detection_from(const Refined& h, const Region& region, con
 }
 
 std::optional<Detection> Recognizer::try_candidates(const Region& region, std::span<const std::size_t> which,
-                                                    bool take_best, const Frame& frame, Recognition& out) const {
+                                                    bool take_best, const FrameAndPlanes& frame, Recognition& out) const {
   std::optional<Detection> found;
   std::vector<Hypothesis> hypotheses;
   for (const std::size_t i : which) hypotheses.push_back({region.candidates[i].object, region.candidates[i].T_camera_object});
   // All at once on the threads there are; then taken in order, as one after the other would.
   const Description& d = region.description;
   const std::vector<Refined> refined =
-      refine_and_verify(hypotheses, region.icp_source, d.cloud.points, frame, region.verify, out.times, &region.refused);
+      refine_and_verify(hypotheses, region.icp_source, d.cloud.points, frame, region.verify, out, &region.refused);
   const Refined* nearest_miss = nullptr;
   std::size_t nearest_miss_at = 0;
   for (std::size_t k = 0; k < refined.size(); ++k) {
@@ -917,7 +928,7 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
     // Nothing passed, but one pose failed only by seeing through it: try it turned about its axes.
     const Candidate& c = region.candidates[which[nearest_miss_at]];
     const std::vector<Refined> turned = refine_and_verify(half_turns(nearest_miss->T_camera_object, c.object),
-                                                          region.icp_source, d.cloud.points, frame, region.verify, out.times);
+                                                          region.icp_source, d.cloud.points, frame, region.verify, out);
     out.hypotheses += turned.size();
     for (const Refined& h : turned) {
       if (h.accepted && (!found || h.v.score > found->verification.score)) found = detection_from(h, region, c);
@@ -926,7 +937,7 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
   return found;
 }
 
-void Recognizer::challenge(const Region& region, std::size_t next, std::size_t end, Detection& best, const Frame& frame,
+void Recognizer::challenge(const Region& region, std::size_t next, std::size_t end, Detection& best, const FrameAndPlanes& frame,
                            Recognition& out) const {
   // Another object may explain the region better (two boxes of similar size): the other objects'
   // next few starting poses are tried, and the higher verification score wins.
@@ -944,12 +955,12 @@ void Recognizer::challenge(const Region& region, std::size_t next, std::size_t e
   }
 }
 
-void Recognizer::turn_if_better(const Region& region, Detection& best, const Frame& frame, Recognition& out) const {
+void Recognizer::turn_if_better(const Region& region, Detection& best, const FrameAndPlanes& frame, Recognition& out) const {
   // The pose turned about the object's own axes, each refined and verified; the best is kept, and
   // the runner-up's score says by how much it won.
   const std::vector<Refined> turned = refine_and_verify(half_turns(best.T_camera_object, best.object_index),
                                                         region.icp_source, region.description.cloud.points, frame,
-                                                        region.verify, out.times);
+                                                        region.verify, out);
   out.hypotheses += turned.size();
   double runner_up = 0;
   for (const Refined& h : turned) {
@@ -968,7 +979,7 @@ void Recognizer::turn_if_better(const Region& region, Detection& best, const Fra
   best.runner_up_score = runner_up;
 }
 
-std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points, const Frame& frame,
+std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points, const FrameAndPlanes& frame,
                                                        const VerifyOptions& verify, Recognition& out,
                                                        std::optional<Detection>* partial, bool votes) const {
   std::vector<Region> regions;
@@ -976,7 +987,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
   return search(regions, frame, out, partial, votes);
 }
 
-std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const Frame& frame, Recognition& out,
+std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const FrameAndPlanes& frame, Recognition& out,
                                             std::optional<Detection>* partial, bool votes) const {
   // The starting poses of every region, best first across them (by the screen, else coarse fit), a
   // batch at a time from one region, until one passes or the budget is spent (with keep_best: all

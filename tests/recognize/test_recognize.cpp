@@ -1071,7 +1071,8 @@ TEST(RealData, APoseWhoseHiddenPartLiesInsideTheTableIsDropped) {
   // pitcher, a pitcher fitted to the master chef can passed every test of verification (score
   // 1.00), its handle and spout "occluded" by the table they would stand in
   // (AcceptOptions::max_share_inside_planes). Measured: 12 % of its model inside the table; the
-  // right pitcher's 0.
+  // right pitcher's 0. Refused, the can's region goes on to its next poses: more pitchers in the
+  // table (7 refused in all), none standing.
 #ifdef VIEWPOSE_SANITIZER_BUILD
   GTEST_SKIP() << "skipped under the sanitizers: real frames against a database take minutes there";
 #endif
@@ -1085,7 +1086,9 @@ TEST(RealData, APoseWhoseHiddenPartLiesInsideTheTableIsDropped) {
   const Recognition r = Recognizer(db).recognize(frame);
   EXPECT_EQ(r.detections.size(), 1u);
   EXPECT_EQ(ids_of(right_detections(r, db, *image)), std::set<int>{11});
-  EXPECT_EQ(r.dropped_inside_planes, 1u);
+  // More than the one: refused in the search, the region went on to its next poses (judged only on
+  // the frame's detections, one was dropped and the region's other poses never tried).
+  EXPECT_GT(r.dropped_inside_planes, 1u);
   // Without the rule the phantom stands (the test's reason to exist).
   RecognizerOptions keep_all;
   keep_all.accept.max_share_inside_planes = 1;

@@ -162,14 +162,14 @@ struct AcceptOptions {
   /// the more confident is kept; one whose evidence another already explains is dropped.
   bool resolve_scene_claims = true;
   SceneClaimOptions scene_claims{};
-  /// A detection with more than this share of its model inside a removed plane where the camera saw
-  /// that plane (pose/through_planes.hpp: the table it stands on, a wall) is dropped: no object
-  /// stands in a table (1: none dropped). Measured: every right detection on the real and simulated
+  /// A pose with more than this share of its model inside a removed plane where the camera saw that
+  /// plane (pose/through_planes.hpp: the table it stands on, a wall) is not accepted: no object
+  /// stands in a table (1: none refused). Measured: every right detection on the real and simulated
   /// sets 0 (of 200); three false positives that passed every test of verification 0.03-0.12 (a
   /// box taken for another in a real mOSD frame, the pitcher fitted to a can in real YCB-V, the jug
-  /// fitted to a can at the seed room's image edge). Judged once the frame's search is done: a
-  /// region whose first passing pose is dropped does not go on to its next (none of those three had
-  /// a right one). Within 0-1.
+  /// fitted to a can at the seed room's image edge). Judged as a pose passes verification and the
+  /// confidence bound, so that the region's search goes on to its next pose; and once more on the
+  /// frame's detections (those verified jointly with another). Within 0-1.
   double max_share_inside_planes = 0.02;
   /// Called in order, on the calling thread, for every hypothesis that passed verification's bounds,
   /// before the confidence threshold: what the confidence model is fit on (viewpose bop --hypotheses).
@@ -351,7 +351,9 @@ struct Recognition {
   std::size_t regions = 0;  ///< clusters, parts and remainders described and matched against the database
   /// Detections dropped because another, more confident one explains the same pixels.
   std::size_t dropped_as_explained = 0;
-  std::size_t dropped_inside_planes = 0;  ///< detections inside a removed plane (AcceptOptions::max_share_inside_planes)
+  /// Poses that passed verification and the confidence bound but lay inside a removed plane
+  /// (AcceptOptions::max_share_inside_planes), refused in the search or dropped from the detections.
+  std::size_t dropped_inside_planes = 0;
   /// Pairs of unexplained pieces searched as one region (SplitOptions::join_gap_m).
   std::size_t joined_regions = 0;
   /// RecognizerOptions::deadline_ms ran out: clusters, views or checks were left untried.
@@ -373,9 +375,17 @@ class Recognizer {
   const RecognizerOptions& options() const { return options_; }
 
  private:
+  // What the search of a frame reads of it: the depth and intrinsics verification judges poses on,
+  // and the planes the segmentation removed, inside which no pose is accepted
+  // (AcceptOptions::max_share_inside_planes).
+  struct FrameAndPlanes {
+    const DepthImage& depth;
+    const CameraIntrinsics& K;
+    std::span<const Plane> planes;
+  };
   // Describe, match, align, refine and verify one cluster; the first (or best) accepted pose.
   // With `votes`, where no view's pose passes, the point pair votes' (PoseSource both, touching).
-  std::optional<Detection> recognize_cluster(const PointCloud& points, const Frame& frame, const VerifyOptions& verify,
+  std::optional<Detection> recognize_cluster(const PointCloud& points, const FrameAndPlanes& frame, const VerifyOptions& verify,
                                              Recognition& out, std::optional<Detection>* partial = nullptr, bool votes = false) const;
   struct Refined;
   // A starting pose: a database view (by its rank among the region's matches) turned by one CRH roll,
@@ -420,20 +430,20 @@ class Recognizer {
   };
   // The region described and matched, its starting poses ranked; nullopt when it has too few points
   // with normals.
-  std::optional<Region> describe_region(const PointCloud& points, const Frame& frame, const VerifyOptions& verify,
+  std::optional<Region> describe_region(const PointCloud& points, const FrameAndPlanes& frame, const VerifyOptions& verify,
                                         Recognition& out) const;
   // The regions' starting poses tried best first across them (screened by a short ICP, else by
   // coarse fit), within one budget (the convex parts of a cluster share it); the first accepted (or
   // the best), challenged and turned.
   // With `partial`: where nothing passes, the best pose that failed only by the share of its region
   // it explains (SplitOptions::joint_min_cluster_explained), if any, for explain_jointly.
-  std::optional<Detection> search(std::vector<Region>& regions, const Frame& frame, Recognition& out,
+  std::optional<Detection> search(std::vector<Region>& regions, const FrameAndPlanes& frame, Recognition& out,
                                   std::optional<Detection>* partial = nullptr, bool votes = false) const;
   // `partial`'s points taken out of `points` and the rest searched; when the rest gives a detection
   // and `partial`, verified again on the points that one leaves, passes `verify`, both are added,
   // and what neither explains is recognized again (depth + 1). The rest is searched with the votes'
   // poses as well where the region was (`votes`).
-  void explain_jointly(const PointCloud& points, const Detection& partial, const Frame& frame, const VerifyOptions& verify,
+  void explain_jointly(const PointCloud& points, const Detection& partial, const FrameAndPlanes& frame, const VerifyOptions& verify,
                        Recognition& out, int depth, bool votes) const;
   // Every roll of every matched view (and with PoseSource ppf or both, every pose the pair votes give)
   // as a starting pose, best coarse fit first.
@@ -448,22 +458,22 @@ class Recognizer {
   // camera sees past the model there; MatchOptions::prescreen says why that is safe), counted in
   // `out.screened_out`: such a pose keeps its place in the order and its share of the budget, but
   // is not refined in full. Tested only when its turn comes.
-  bool refused_after_screen(const Region& region, const Candidate& c, const Frame& frame, Recognition& out) const;
+  bool refused_after_screen(const Region& region, const Candidate& c, const FrameAndPlanes& frame, Recognition& out) const;
   // The starting poses `which` (indices into region.candidates), refined and verified together: the
   // first accepted in order (with take_best, the best). A batch in which nothing passes but one pose
   // fails only by its free-space conflicts has that pose's half turns tried at once.
   std::optional<Detection> try_candidates(const Region& region, std::span<const std::size_t> which, bool take_best,
-                                          const Frame& frame, Recognition& out) const;
+                                          const FrameAndPlanes& frame, Recognition& out) const;
   // Other objects' next starting poses after position `next` (a few each, within `end`); a higher
   // verification score replaces `best`.
-  void challenge(const Region& region, std::size_t next, std::size_t end, Detection& best, const Frame& frame,
+  void challenge(const Region& region, std::size_t next, std::size_t end, Detection& best, const FrameAndPlanes& frame,
                  Recognition& out) const;
   // `best` turned half a turn about each of its axes; the best of the four is kept.
-  void turn_if_better(const Region& region, Detection& best, const Frame& frame, Recognition& out) const;
+  void turn_if_better(const Region& region, Detection& best, const FrameAndPlanes& frame, Recognition& out) const;
   Detection detection_from(const Refined& h, const Region& region, const Candidate& c) const;
   // A cluster, or what is left of one: recognized whole, else split into convex parts; once a part
   // is recognized, its object's points are taken away and the rest recognized again (depth + 1).
-  void recognize_region(const PointCloud& points, const Frame& frame, Recognition& out, int depth) const;
+  void recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth) const;
   // A piece of the frame no detection explains: a cluster no detection reaches, or a cluster of
   // what detections leave of one.
   struct Piece {
@@ -476,11 +486,11 @@ class Recognizer {
   std::vector<Piece> unexplained_pieces(const Segmentation& seg, std::span<const Detection> detections, double widest) const;
   // Pairs of those pieces near each other and cut apart by missing depth (SplitOptions::
   // join_gap_m), each searched as one region, nearest first; what passes is added.
-  void join_fragments(const Segmentation& seg, const Frame& frame, Recognition& out) const;
+  void join_fragments(const Segmentation& seg, const FrameAndPlanes& frame, Recognition& out) const;
   // `verify` tightened for a part of a region (SplitOptions::part_*).
   VerifyOptions part_verify_options() const;
   // Adds the detection, then recognizes what of `points` it leaves unexplained (depth + 1).
-  void recognize_rest(const PointCloud& points, Detection detection, const Frame& frame, Recognition& out, int depth) const;
+  void recognize_rest(const PointCloud& points, Detection detection, const FrameAndPlanes& frame, Recognition& out, int depth) const;
   // Which of `points` (camera frame) lie on the detected model's surface, within the verification tolerance.
   std::vector<char> explained_points(const Detection& detection, const PointCloud& points) const;
   // The Euclidean clusters of the points `explained` leaves out (timed as splitting).
@@ -497,7 +507,8 @@ class Recognizer {
     bool verified = false;
     bool repeat = false;  // not verified: ICP brought it onto a pose already refused
     double confidence = 0;  // pose_confidence(v), for those v passes
-    bool accepted = false;  // v passes and the confidence reaches min_confidence
+    bool accepted = false;  // v passes, the confidence reaches min_confidence, and it lies in no plane
+    bool inside_planes = false;  // v passes and the confidence is reached, but the model lies inside a removed plane
     double icp_ms = 0, verify_ms = 0;
   };
   // An initial pose of an object.
@@ -507,10 +518,11 @@ class Recognizer {
   };
   // Each hypothesis refined and verified, in parallel when allowed; the results in the order given,
   // so that what is made of them does not depend on the threads. Those ICP brings onto a pose in
-  // `refused` (by object; may be null) are not verified.
+  // `refused` (by object; may be null) are not verified. A pose that passes but lies inside a plane
+  // is not accepted, and counted in `out` (Recognition::dropped_inside_planes), as are the times.
   std::vector<Refined> refine_and_verify(std::span<const Hypothesis> hypotheses, std::span<const Eigen::Vector3f> icp_source,
-                                         std::span<const Eigen::Vector3f> cluster, const Frame& frame,
-                                         const VerifyOptions& verify, StageTimes& times,
+                                         std::span<const Eigen::Vector3f> cluster, const FrameAndPlanes& frame,
+                                         const VerifyOptions& verify, Recognition& out,
                                          const std::vector<std::vector<Transform>>* refused = nullptr) const;
   // `T_camera_object` turned half a turn about each of `object`'s axes, as hypotheses of it.
   std::vector<Hypothesis> half_turns(const Transform& T_camera_object, std::uint32_t object) const;
@@ -538,13 +550,17 @@ class Recognizer {
   // Past the deadline (and marks `out` cut short): no further views, parts or checks are tried.
   bool out_of_time(Recognition& out) const;
   // Drops the detections whose pixels more confident ones already explain (resolve_scene_claims).
-  void resolve_scene(const Frame& frame, Recognition& out) const;
+  void resolve_scene(const FrameAndPlanes& frame, Recognition& out) const;
   // Each symmetric object that stands on one of the frame's removed planes reported standing on it
   // as modelled (canonical_pose with the plane's up; search chose with the camera's default up).
   // Timed as verification.
   void stand_on_resting_planes(std::span<const Eigen::Vector4f> planes, Recognition& out) const;
-  // Drops the detections whose models lie inside a removed plane (AcceptOptions::max_share_inside_planes).
-  void drop_inside_planes(std::span<const Plane> planes, const Frame& frame, Recognition& out) const;
+  // Whether `object`'s model at `T_camera_object` lies inside one of the frame's removed planes
+  // (AcceptOptions::max_share_inside_planes).
+  bool inside_planes(std::uint32_t object, const Transform& T_camera_object, const FrameAndPlanes& frame) const;
+  // Drops the detections whose models lie inside a removed plane: those of the ways that verify a
+  // pose without refine_and_verify (a pose explained jointly with another).
+  void drop_inside_planes(const FrameAndPlanes& frame, Recognition& out) const;
   // A cluster's own record (RunOptions::parallel_clusters) added to the frame's: its detections
   // after those before, its counts and stage times summed.
   static void merge_part(Recognition&& part, Recognition& out);
