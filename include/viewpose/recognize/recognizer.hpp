@@ -530,6 +530,7 @@ class Recognizer {
   // RunOptions::prepare_objects_up_to) or on its first hypothesis: a database of a thousand objects
   // costs nothing for the objects a scene never suggests. The drawing mesh and the grid's cells are
   // taken from the database where it stores them for these options.
+  static constexpr std::size_t kPlaneTestPoints = 2000;
   struct PreparedObject {
     std::once_flag once;
     std::unique_ptr<IcpTarget> target;
@@ -540,6 +541,7 @@ class Recognizer {
     // on (stand_on_resting_planes).
     std::vector<Eigen::Vector3d> standing_axes;
     BoundingBox model_box;  // of the model points (a detection's reach, join_fragments)
+    std::vector<Eigen::Vector3f> plane_test_points;  // at most kPlaneTestPoints of them, evenly through their order (inside_planes)
     std::once_flag ppf_once;  // the pair table is made only where pair votes are asked for
     std::unique_ptr<PpfModel> ppf;
   };
