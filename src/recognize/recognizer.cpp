@@ -291,11 +291,9 @@ Recognition Recognizer::recognize(const Frame& frame) const {
     for (Recognition& part : parts) merge_part(std::move(part), out);
   }
   if (options_.split.enabled && options_.split.join_gap_m > 0 && !out_of_time(out)) join_fragments(seg, seen, out);
-  std::vector<Eigen::Vector4f> planes;
-  for (const Plane& plane : seg.planes) planes.push_back(plane.coefficients);
   if (!out.detections.empty()) drop_inside_planes(seen, out);
   // (Before the claims: they are judged at the poses reported.)
-  if (options_.accept.canonical_poses && !planes.empty()) stand_on_resting_planes(planes, out);
+  if (options_.accept.canonical_poses && !seg.planes.empty() && !out.detections.empty()) stand_on_resting_planes(seg.planes, out);
   if (options_.accept.resolve_scene_claims && out.detections.size() > 1) resolve_scene(seen, out);
   out.times.total_ms = ms_since(start);
   return out;
@@ -319,8 +317,10 @@ void Recognizer::drop_inside_planes(const FrameAndPlanes& frame, Recognition& ou
   out.times.verify_ms += ms_since(t);
 }
 
-void Recognizer::stand_on_resting_planes(std::span<const Eigen::Vector4f> planes, Recognition& out) const {
+void Recognizer::stand_on_resting_planes(std::span<const Plane> planes, Recognition& out) const {
   const auto t = Clock::now();
+  std::vector<Eigen::Vector4f> coefficients;
+  for (const Plane& plane : planes) coefficients.push_back(plane.coefficients);
   for (Detection& d : out.detections) {
     const DatabaseObject& object = db_.objects[d.object_index];
     if (object.symmetries.empty()) continue;
@@ -329,7 +329,7 @@ void Recognizer::stand_on_resting_planes(std::span<const Eigen::Vector4f> planes
     const float touch_m = options_.segment.planes.distance_threshold_m +
                           depth_tolerance(static_cast<float>(d.T_camera_object.translation().z()), options_.verify);
     const std::vector<Eigen::Vector3d>& standing_axes = prepared(d.object_index).standing_axes;
-    if (const std::optional<Eigen::Vector3d> up = resting_plane_up(planes, object.model_points, d.T_camera_object, standing_axes, touch_m)) {
+    if (const std::optional<Eigen::Vector3d> up = resting_plane_up(coefficients, object.model_points, d.T_camera_object, standing_axes, touch_m)) {
       d.T_camera_object = canonical_pose(d.T_camera_object, object.symmetries, *up);
     }
   }
@@ -699,7 +699,6 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const H
     // region's next (pose/through_planes.hpp).
     if (h.accepted && inside_planes(hypotheses[k].object, h.T_camera_object, frame)) {
       h.accepted = false;
-      h.inside_planes = true;
       ++record.dropped_inside_planes;
     }
   }

@@ -35,7 +35,7 @@ std::vector<Eigen::Vector3f> rod() {
 
 Transform at(double x, double z) { return make_transform(Eigen::Matrix3d::Identity(), Eigen::Vector3d(x, 0.0, z)); }
 
-// The rod's share inside the planes removed from `depth` (or `planes`), judged on `depth`.
+// The rod's share inside the planes removed from `depth`, judged on `depth`.
 double share(const DepthImage& depth, const Transform& T, float margin_m) {
   return share_inside_planes(planes_in(depth), depth, kinect(), rod(), T, margin_m);
 }

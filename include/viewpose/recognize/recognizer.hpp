@@ -508,7 +508,6 @@ class Recognizer {
     bool repeat = false;  // not verified: ICP brought it onto a pose already refused
     double confidence = 0;  // pose_confidence(v), for those v passes
     bool accepted = false;  // v passes, the confidence reaches min_confidence, and it lies in no plane
-    bool inside_planes = false;  // v passes and the confidence is reached, but the model lies inside a removed plane
     double icp_ms = 0, verify_ms = 0;
   };
   // An initial pose of an object.
@@ -556,7 +555,7 @@ class Recognizer {
   // Each symmetric object that stands on one of the frame's removed planes reported standing on it
   // as modelled (canonical_pose with the plane's up; search chose with the camera's default up).
   // Timed as verification.
-  void stand_on_resting_planes(std::span<const Eigen::Vector4f> planes, Recognition& out) const;
+  void stand_on_resting_planes(std::span<const Plane> planes, Recognition& out) const;
   // Whether `object`'s model at `T_camera_object` lies inside one of the frame's removed planes
   // (AcceptOptions::max_share_inside_planes).
   bool inside_planes(std::uint32_t object, const Transform& T_camera_object, const FrameAndPlanes& frame) const;
