@@ -133,6 +133,9 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
   if (!(options_.split.join_gap_m >= 0 && options_.split.join_gap_m <= 1)) {
     throw Error(fmt::format("recognize: the gap between pieces joined is {} m, not within 0-1 m", options_.split.join_gap_m));
   }
+  if (!(options_.split.grow_reach_m >= 0 && options_.split.grow_reach_m <= 1)) {
+    throw Error(fmt::format("recognize: a part's pose is grown {} m around its model, not within 0-1 m", options_.split.grow_reach_m));
+  }
   if (!(options_.accept.max_share_inside_planes >= 0 && options_.accept.max_share_inside_planes <= 1)) {
     throw Error(fmt::format("recognize: the share of a model allowed inside a plane is {}, not within 0-1", options_.accept.max_share_inside_planes));
   }
@@ -348,6 +351,7 @@ void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   out.dropped_as_explained += part.dropped_as_explained;
   out.dropped_inside_planes += part.dropped_inside_planes;
   out.joined_regions += part.joined_regions;
+  out.grown_regions += part.grown_regions;
   out.cut_short = out.cut_short || part.cut_short;
 }
 
@@ -427,8 +431,18 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
     if (bounding_box(part_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
     if (std::optional<Region> region = describe_region(part_points, frame, part_verify, out)) regions.push_back(std::move(*region));
   }
-  std::optional<Detection> part_partial;
-  std::optional<Detection> det = search(regions, frame, out, &part_partial, votes);
+  std::optional<Detection> part_partial, seed;
+  std::optional<Detection> det = search(regions, frame, out, &part_partial, votes, &seed);
+  if (!det && seed && !out_of_time(out)) {
+    // A part's pose that failed only because most of the model it shows lies outside the part (a
+    // mug's outer wall, cut from its inside and handle at the creases): the region's points near
+    // that model, one piece, searched as a region of their own (SplitOptions::grow_reach_m).
+    const PointCloud grown = grown_region(points, *seed);
+    if (grown.size() > seed->cluster_points) {
+      ++out.grown_regions;
+      det = recognize_cluster(grown, frame, part_verify, out, nullptr, votes);
+    }
+  }
   if (!det) {
     // No part passed alone: a pose that explains part of the region (or of a part) well, and
     // whatever the rest of the region is.
@@ -630,6 +644,25 @@ std::vector<Cluster> Recognizer::unexplained_clusters(const PointCloud& points, 
   return clusters;
 }
 
+PointCloud Recognizer::grown_region(const PointCloud& points, const Detection& seed) const {
+  const Transform T_object_camera = seed.T_camera_object.inverse();
+  const IcpTarget& model = icp_target(seed.object_index);
+  const float reach = options_.split.grow_reach_m;
+  PointCloud near;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f q = (T_object_camera * points.points[i].cast<double>()).cast<float>();
+    std::uint32_t index = 0;
+    float d2 = 0;
+    if (model.tree.nearest(q, index, d2) && d2 <= reach * reach) near.points.push_back(points.points[i]);
+  }
+  near.width = static_cast<int>(near.points.size());
+  near.height = 1;
+  const std::vector<Cluster> clusters = clusters_of_unexplained(near, std::vector<char>(near.size(), 0), options_.segment.clusters);
+  if (clusters.empty()) return {};
+  const auto largest = std::max_element(clusters.begin(), clusters.end(), [](const Cluster& a, const Cluster& b) { return a.size() < b.size(); });
+  return cluster_points(near, *largest);
+}
+
 std::vector<char> Recognizer::explained_points(const Detection& detection, const PointCloud& points) const {
   std::vector<char> explained(points.size(), 0);
   const Transform T_object_camera = detection.T_camera_object.inverse();
@@ -750,6 +783,8 @@ std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& 
     region.smallest_diameter = core_width(d.cloud.points, verify.min_cluster_explained) - slack;
   }
   region.partial = verify;
+  region.seed = verify;
+  region.seed.min_model_support = 0;
   region.partial.min_cluster_explained = std::min(verify.min_cluster_explained, options_.split.joint_min_cluster_explained);
   region.near_miss.max_conflict_fraction = std::max(verify.max_conflict_fraction, options_.accept.near_miss_conflict_fraction);
   region.try_near_misses = options_.accept.try_half_turns && region.near_miss.max_conflict_fraction > verify.max_conflict_fraction;
@@ -916,6 +951,10 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
       region.best_partial = detection_from(h, region, c);
       region.best_partial->score = pose_confidence(h.v);
     }
+    if (!h.v.accepted && options_.split.grow_reach_m > 0 && passes(h.v, region.seed) &&
+        (!region.best_seed || h.v.score > region.best_seed->verification.score)) {
+      region.best_seed = detection_from(h, region, c);
+    }
     if (!h.v.accepted) {
       if (region.try_near_misses && passes(h.v, region.near_miss) && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
         nearest_miss = &h;
@@ -992,7 +1031,7 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
 }
 
 std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const FrameAndPlanes& frame, Recognition& out,
-                                            std::optional<Detection>* partial, bool votes) const {
+                                            std::optional<Detection>* partial, bool votes, std::optional<Detection>* seed) const {
   // The starting poses of every region, best first across them (by the screen, else coarse fit), a
   // batch at a time from one region, until one passes or the budget is spent (with keep_best: all
   // of them, the best kept). The regions share the budget: the parts of one cluster compete for it.
@@ -1029,6 +1068,23 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
       for (Region& region : regions) prescreen(region, 0, out);
     }
     std::size_t spent = 0;
+    // A split cluster's parts each try their first batch, largest part first, before the order
+    // across them takes over: a part of a known object beside an unknown larger one (a mug against
+    // a box) screens below the poses of the known object fitted to the larger one's part, and the
+    // shared budget was spent before its turn came (SplitOptions::grow_reach_m then uses its pose).
+    if (regions.size() > 1 && !every) {
+      for (std::size_t r = 0; r < regions.size() && spent < budget && !best && !out_of_time(out); ++r) {
+        which.clear();
+        for (std::size_t taken = 0; next[r] < end[r] && taken < batch && spent < budget; ++next[r], ++taken, ++spent) {
+          if (!refused_after_screen(regions[r], regions[r].candidates[next[r]], frame, out)) which.push_back(next[r]);
+        }
+        if (which.empty()) continue;
+        if (std::optional<Detection> det = try_candidates(regions[r], which, false, frame, out)) {
+          best = std::move(det);
+          best_region = r;
+        }
+      }
+    }
     while (spent < budget && !(best && !options_.accept.keep_best)) {
       if (out_of_time(out)) break;
       if (screen && regions.size() == 1 && !regions[0].screen_done && next[0] > 0) prescreen(regions[0], next[0], out);
@@ -1056,6 +1112,11 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
     }
   }
   if (!best) {
+    if (seed) {
+      for (const Region& region : regions) {
+        if (region.best_seed && (!*seed || region.best_seed->verification.score > (*seed)->verification.score)) *seed = region.best_seed;
+      }
+    }
     if (partial) {
       for (const Region& region : regions) {
         if (region.best_partial && (!*partial || region.best_partial->verification.score > (*partial)->verification.score)) *partial = region.best_partial;

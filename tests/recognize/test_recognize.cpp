@@ -109,6 +109,12 @@ TEST(Recognize, OptionsAreGivenByStageAndTheDatabaseFixesTheVoxelSize) {
     bad.accept.max_share_inside_planes = share;
     EXPECT_THROW(Recognizer(jug_db(), bad), Error) << share;
   }
+  // A reach to grow a part's pose by that is negative, NaN or past a metre (a unit mistake).
+  for (const float reach : {-0.01f, 20.0f, std::nanf("")}) {
+    RecognizerOptions bad;
+    bad.split.grow_reach_m = reach;
+    EXPECT_THROW(Recognizer(jug_db(), bad), Error) << reach;
+  }
 }
 
 TEST(Recognize, ADeadlineCutsTheFrameShortAndSaysSo) {
@@ -173,6 +179,7 @@ void expect_same_recognition(const Recognition& a, const Recognition& b) {
   EXPECT_EQ(a.dropped_as_explained, b.dropped_as_explained);
   EXPECT_EQ(a.dropped_inside_planes, b.dropped_inside_planes);
   EXPECT_EQ(a.joined_regions, b.joined_regions);
+  EXPECT_EQ(a.grown_regions, b.grown_regions);
   ASSERT_EQ(a.detections.size(), b.detections.size());
   for (std::size_t i = 0; i < a.detections.size(); ++i) {
     EXPECT_EQ(a.detections[i].object_id, b.detections[i].object_id);
@@ -1040,6 +1047,37 @@ TEST(RealData, AMugSeenInTwoPiecesIsFoundWhenThePiecesAreSearchedTogether) {
     }
     EXPECT_EQ(r.joined_regions > 0, join_gap_m > 0);
     EXPECT_TRUE(found.count(8) && found.count(21));
+  }
+}
+
+TEST(RealData, AMugAgainstObjectsNotInTheDatabaseIsGrownFromItsPart) {
+  // YCB-Video 0000 (ycbv_real_dev) with the mug alone in the database: it touches the foam brick
+  // and the gelatin box, which the database does not hold. Their cluster is cut into convex parts,
+  // and the mug's outer wall, inside and handle fall into different ones: a pose found on the wall
+  // shows a model most of whose surface lies on the other parts, and fails the model's support.
+  // Grown into the points near that model (SplitOptions::grow_reach_m), the mug is one region and
+  // passes. Measured: 5 of the 8 frames found with it, none without, none wrong; two tested here.
+#ifdef VIEWPOSE_SANITIZER_BUILD
+  GTEST_SKIP() << "skipped under the sanitizers: real frames against a database take minutes there";
+#endif
+  VIEWPOSE_REQUIRE_SHARED_DATA();
+  const BopDataset ds = open_bop_dataset(test::shared_data() / "ycbv_real_dev", "test", {"models"});
+  const ViewDatabase db = ycbv_dev_database(ds, {14});
+  for (const int im_id : {3, 7}) {
+    const BopImage* image = find_image(ds, 0, im_id);
+    ASSERT_NE(image, nullptr);
+    const BopFrame bf = load_bop_frame(*image);
+    const Frame frame = frame_from_depth(bf.depth, bf.K);
+    for (const float grow_reach_m : {SplitOptions{}.grow_reach_m, 0.0f}) {
+      SCOPED_TRACE(fmt::format("frame {}, grown within {} m", im_id, grow_reach_m));
+      RecognizerOptions options;
+      options.split.grow_reach_m = grow_reach_m;
+      const Recognition r = Recognizer(db, options).recognize(frame);
+      const std::map<int, double> found = right_detections(r, db, *image);
+      EXPECT_EQ(r.detections.size(), found.size()) << "a detection that is not the mug";
+      EXPECT_EQ(found.count(14), grow_reach_m > 0 ? 1u : 0u);
+      EXPECT_EQ(r.grown_regions > 0, grow_reach_m > 0);
+    }
   }
 }
 
