@@ -434,9 +434,9 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   std::optional<Detection> part_partial, seed;
   std::optional<Detection> det = search(regions, frame, out, &part_partial, votes, &seed);
   if (!det && seed && !out_of_time(out)) {
-    // A part's pose that failed only because most of the model it shows lies outside the part (a
-    // mug's outer wall, cut from its inside and handle at the creases): the region's points near
-    // that model, one piece, searched as a region of their own (SplitOptions::grow_reach_m).
+    // A part's pose that was not accepted because much of the model it shows lies outside the
+    // part (a mug's outer wall, cut from its inside and handle at the creases): the region's points
+    // near that model, one piece, searched as a region of their own (SplitOptions::grow_reach_m).
     const PointCloud grown = grown_region(points, *seed);
     if (grown.size() > seed->cluster_points) {
       ++out.grown_regions;
@@ -951,7 +951,7 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
       region.best_partial = detection_from(h, region, c);
       region.best_partial->score = pose_confidence(h.v);
     }
-    if (!h.v.accepted && options_.split.grow_reach_m > 0 && passes(h.v, region.seed) &&
+    if (!h.accepted && options_.split.grow_reach_m > 0 && passes(h.v, region.seed) &&
         (!region.best_seed || h.v.score > region.best_seed->verification.score)) {
       region.best_seed = detection_from(h, region, c);
     }

@@ -1056,14 +1056,16 @@ TEST(RealData, AMugAgainstObjectsNotInTheDatabaseIsGrownFromItsPart) {
   // and the mug's outer wall, inside and handle fall into different ones: a pose found on the wall
   // shows a model most of whose surface lies on the other parts, and fails the model's support.
   // Grown into the points near that model (SplitOptions::grow_reach_m), the mug is one region and
-  // passes. Measured: 5 of the 8 frames found with it, none without, none wrong; two tested here.
+  // passes. Measured: 6 of the 8 frames found with it, none without, none wrong; two tested here.
 #ifdef VIEWPOSE_SANITIZER_BUILD
   GTEST_SKIP() << "skipped under the sanitizers: real frames against a database take minutes there";
 #endif
   VIEWPOSE_REQUIRE_SHARED_DATA();
   const BopDataset ds = open_bop_dataset(test::shared_data() / "ycbv_real_dev", "test", {"models"});
   const ViewDatabase db = ycbv_dev_database(ds, {14});
-  for (const int im_id : {3, 7}) {
+  // In frame 3 the wall's pose fails the support; in frame 6 it passes it narrowly (half the model
+  // on the part) with a confidence of 0.72, below the bound.
+  for (const int im_id : {3, 6}) {
     const BopImage* image = find_image(ds, 0, im_id);
     ASSERT_NE(image, nullptr);
     const BopFrame bf = load_bop_frame(*image);
