@@ -434,11 +434,13 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   std::optional<Detection> part_partial, seed;
   std::optional<Detection> det = search(regions, frame, out, &part_partial, votes, &seed);
   if (!det && seed && !out_of_time(out)) {
-    // A part's pose that was not accepted because much of the model it shows lies outside the
-    // part (a mug's outer wall, cut from its inside and handle at the creases): the region's points
-    // near that model, one piece, searched as a region of their own (SplitOptions::grow_reach_m).
+    // A part's pose that met every part bound but the model's support and was not accepted: much
+    // of the model it shows lies outside the part (a mug's outer wall, cut from its inside and
+    // handle at the creases). The region's points near that model, one piece, are searched as a
+    // region of their own (SplitOptions::grow_reach_m), when they reach beyond the seed's part and
+    // are not the whole region, searched already.
     const PointCloud grown = grown_region(points, *seed);
-    if (grown.size() > seed->cluster_points) {
+    if (grown.size() > seed->cluster_points && grown.size() < points.size()) {
       ++out.grown_regions;
       det = recognize_cluster(grown, frame, part_verify, out, nullptr, votes);
     }
@@ -750,6 +752,7 @@ std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& 
                                                               const VerifyOptions& verify, Recognition& out) const {
   DescribeTimes dt;
   Region region;
+  region.point_count = points.size();
   region.description = describe(points, db_.params.describe, &dt);
   region.verify = region.near_miss = verify;
   region.refused.resize(db_.objects.size());
@@ -951,9 +954,14 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
       region.best_partial = detection_from(h, region, c);
       region.best_partial->score = pose_confidence(h.v);
     }
-    if (!h.accepted && options_.split.grow_reach_m > 0 && passes(h.v, region.seed) &&
+    // A seed to grow: every part bound met but the model's support, and not accepted, whether it
+    // failed the support or passed it narrowly and scored below the confidence bound (a pose
+    // refused only for lying inside a plane is no seed: it would be refused again).
+    const bool scored_low = h.v.accepted && h.confidence < options_.accept.min_confidence;
+    if ((!h.v.accepted || scored_low) && options_.split.grow_reach_m > 0 && passes(h.v, region.seed) &&
         (!region.best_seed || h.v.score > region.best_seed->verification.score)) {
       region.best_seed = detection_from(h, region, c);
+      region.best_seed->cluster_points = region.point_count;  // as grown_region counts points
     }
     if (!h.v.accepted) {
       if (region.try_near_misses && passes(h.v, region.near_miss) && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
@@ -1068,10 +1076,14 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
       for (Region& region : regions) prescreen(region, 0, out);
     }
     std::size_t spent = 0;
-    // A split cluster's parts each try their first batch, largest part first, before the order
-    // across them takes over: a part of a known object beside an unknown larger one (a mug against
-    // a box) screens below the poses of the known object fitted to the larger one's part, and the
-    // shared budget was spent before its turn came (SplitOptions::grow_reach_m then uses its pose).
+    // A split cluster's parts each try their first batch (their best screened poses), largest part
+    // first, before the order across them takes over: a part of a known object beside an unknown
+    // larger one (a mug against a box) screens below the poses of the known object fitted to the
+    // larger one's part, and the shared budget was spent before its turn came
+    // (SplitOptions::grow_reach_m then uses its pose). With three parts or more this round spends
+    // the whole budget, and the smallest parts of four or more get none. Measured: giving each part
+    // fewer (half the budget shared among them) found the mug of YCB-V 0000 alone in the database in
+    // 2 of 8 frames, a batch each in 6.
     if (regions.size() > 1 && !every) {
       for (std::size_t r = 0; r < regions.size() && spent < budget && !best && !out_of_time(out); ++r) {
         which.clear();

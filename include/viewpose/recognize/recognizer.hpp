@@ -239,9 +239,9 @@ struct SplitOptions {
   /// found before, 6 of 8 with it (ADD-S; turned about its axis by 88 degrees on average, its
   /// handle hidden), none false; on the real mOSD frames, which hold no mug, one detection (test33:
   /// a cylinder of the mug's size, its handle side out of sight), where the eight HOPE objects still
-  /// give none. 1 cm (ICP's last reach) gave better poses (17 degrees, 4 mm, against 88 and 16 mm),
-  /// but a jug in the simulated seed room's furniture at 2 m, grown from a piece 2 cm could not
-  /// hold (0: not grown).
+  /// give none. Growing by 1 cm (ICP's last reach) gave better mug poses (17 degrees and 4 mm off
+  /// on average, against 88 and 16 mm) but a false jug at 2 m in the simulated seed room, fitted
+  /// to the furniture (0: not grown).
   float grow_reach_m = 0.02f;
 };
 
@@ -444,7 +444,9 @@ class Recognizer {
     // it had), for search's `partial`.
     mutable std::optional<Detection> best_partial;
     VerifyOptions seed;  // verify without the model's support bound (SplitOptions::grow_reach_m)
-    mutable std::optional<Detection> best_seed;  // the best pose that passed `seed` and was not accepted
+    // The best pose that passed `seed` and was not accepted (its cluster_points: point_count).
+    mutable std::optional<Detection> best_seed;
+    std::size_t point_count = 0;  // the region's points (the description keeps those with normals)
     // By object, the refined poses verification refused so far (try_candidates skips their
     // repeats). A region's batches are tried one after another, on the calling thread.
     mutable std::vector<std::vector<Transform>> refused;
@@ -458,8 +460,9 @@ class Recognizer {
   // the best), challenged and turned.
   // With `partial`: where nothing passes, the best pose that failed only by the share of its region
   // it explains (SplitOptions::joint_min_cluster_explained), if any, for explain_jointly. With
-  // `seed`: the best that failed only by the model's support, to grow (SplitOptions::grow_reach_m).
-  // Two or more regions (a split cluster's parts) each try their first batch before the order across them.
+  // `seed`: the best that met every bound but the model's support and was not accepted, to grow
+  // (SplitOptions::grow_reach_m). Two or more regions (a split cluster's parts) each try their
+  // first batch, within the budget, before the order across them.
   std::optional<Detection> search(std::vector<Region>& regions, const FrameAndPlanes& frame, Recognition& out,
                                   std::optional<Detection>* partial = nullptr, bool votes = false,
                                   std::optional<Detection>* seed = nullptr) const;
