@@ -1055,6 +1055,22 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
   std::optional<Detection> best;
   std::size_t best_region = 0;
   std::vector<std::size_t> which;
+  // One batch of region r: `batch` places in its order, refined and verified together; a pose
+  // better than the best so far is kept. A pose the screen refused keeps its place and spends its
+  // share of the budget unrefined (the next batch is chosen across the regions again, as if it had
+  // been refined).
+  const auto try_batch = [&](std::size_t r, std::size_t& spent) {
+    which.clear();
+    for (std::size_t taken = 0; next[r] < end[r] && taken < batch && spent < budget; ++next[r], ++spent, ++taken) {
+      if (!refused_after_screen(regions[r], regions[r].candidates[next[r]], frame, out)) which.push_back(next[r]);
+    }
+    if (which.empty()) return;
+    std::optional<Detection> det = try_candidates(regions[r], which, options_.accept.keep_best, frame, out);
+    if (det && (!best || det->verification.score > best->verification.score)) {
+      best = std::move(det);
+      best_region = r;
+    }
+  };
   // With `votes` (PoseSource both, touching), the views' poses first, exactly as vfh alone tries
   // them; where none passes, the point pair votes' poses, with a budget of their own: what vfh
   // finds is found the same way. (With ppf, the votes' poses are the region's candidates already.)
@@ -1085,17 +1101,7 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
     // fewer (half the budget shared among them) found the mug of YCB-V 0000 alone in the database in
     // 2 of 8 frames, a batch each in 6.
     if (regions.size() > 1 && !every) {
-      for (std::size_t r = 0; r < regions.size() && spent < budget && !best && !out_of_time(out); ++r) {
-        which.clear();
-        for (std::size_t taken = 0; next[r] < end[r] && taken < batch && spent < budget; ++next[r], ++taken, ++spent) {
-          if (!refused_after_screen(regions[r], regions[r].candidates[next[r]], frame, out)) which.push_back(next[r]);
-        }
-        if (which.empty()) continue;
-        if (std::optional<Detection> det = try_candidates(regions[r], which, false, frame, out)) {
-          best = std::move(det);
-          best_region = r;
-        }
-      }
+      for (std::size_t r = 0; r < regions.size() && spent < budget && !best && !out_of_time(out); ++r) try_batch(r, spent);
     }
     while (spent < budget && !(best && !options_.accept.keep_best)) {
       if (out_of_time(out)) break;
@@ -1108,31 +1114,20 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
         if (next[i] < end[i] && (r == regions.size() || regions[i].candidates[next[i]].priority() > regions[r].candidates[next[r]].priority())) r = i;
       }
       if (r == regions.size()) break;
-      which.clear();
-      // A batch is `batch` places in the order: a pose the screen refused keeps its place and
-      // spends its share of the budget unrefined (the next batch is chosen across the regions
-      // again, as if it had been refined).
-      for (std::size_t taken = 0; next[r] < end[r] && taken < batch && spent < budget; ++next[r], ++spent, ++taken) {
-        if (!refused_after_screen(regions[r], regions[r].candidates[next[r]], frame, out)) which.push_back(next[r]);
-      }
-      if (which.empty()) continue;
-      std::optional<Detection> det = try_candidates(regions[r], which, options_.accept.keep_best, frame, out);
-      if (det && (!best || det->verification.score > best->verification.score)) {
-        best = std::move(det);
-        best_region = r;
-      }
+      try_batch(r, spent);
     }
   }
   if (!best) {
-    if (seed) {
+    // The best of the regions' kept poses (best_seed, best_partial) into `into`.
+    const auto best_kept = [&](std::optional<Detection> Region::*kept, std::optional<Detection>& into) {
       for (const Region& region : regions) {
-        if (region.best_seed && (!*seed || region.best_seed->verification.score > (*seed)->verification.score)) *seed = region.best_seed;
+        const std::optional<Detection>& k = region.*kept;
+        if (k && (!into || k->verification.score > into->verification.score)) into = k;
       }
-    }
+    };
+    if (seed) best_kept(&Region::best_seed, *seed);
     if (partial) {
-      for (const Region& region : regions) {
-        if (region.best_partial && (!*partial || region.best_partial->verification.score > (*partial)->verification.score)) *partial = region.best_partial;
-      }
+      best_kept(&Region::best_partial, *partial);
       if (*partial && options_.accept.canonical_poses) {
         (*partial)->T_camera_object = canonical_pose((*partial)->T_camera_object, db_.objects[(*partial)->object_index].symmetries);
       }
