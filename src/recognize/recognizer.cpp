@@ -21,6 +21,7 @@
 #include "viewpose/database/matching.hpp"
 #include "viewpose/pose/coarse_fit.hpp"
 #include "viewpose/pose/confidence.hpp"
+#include "viewpose/pose/points_on_model.hpp"
 #include "viewpose/pose/resting_plane.hpp"
 #include "viewpose/pose/through_planes.hpp"
 #include "viewpose/core/threads.hpp"
@@ -647,22 +648,8 @@ std::vector<Cluster> Recognizer::unexplained_clusters(const PointCloud& points, 
 }
 
 PointCloud Recognizer::grown_region(const PointCloud& points, const Detection& seed) const {
-  const Transform T_object_camera = seed.T_camera_object.inverse();
-  const IcpTarget& model = icp_target(seed.object_index);
-  const float reach = options_.split.grow_reach_m;
-  PointCloud near;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3f q = (T_object_camera * points.points[i].cast<double>()).cast<float>();
-    std::uint32_t index = 0;
-    float d2 = 0;
-    if (model.tree.nearest(q, index, d2) && d2 <= reach * reach) near.points.push_back(points.points[i]);
-  }
-  near.width = static_cast<int>(near.points.size());
-  near.height = 1;
-  const std::vector<Cluster> clusters = clusters_of_unexplained(near, std::vector<char>(near.size(), 0), options_.segment.clusters);
-  if (clusters.empty()) return {};
-  const auto largest = std::max_element(clusters.begin(), clusters.end(), [](const Cluster& a, const Cluster& b) { return a.size() < b.size(); });
-  return cluster_points(near, *largest);
+  return piece_on_model(points, icp_target(seed.object_index), seed.T_camera_object, options_.split.grow_reach_m,
+                        options_.verify, options_.icp, options_.segment.clusters);
 }
 
 std::vector<char> Recognizer::explained_points(const Detection& detection, const PointCloud& points) const {
