@@ -236,9 +236,9 @@ struct SplitOptions {
   /// distance of its model, the piece of them holding most points within verification's depth
   /// tolerance of it (the largest may be a neighbour's that the reach touched; pose/points_on_model),
   /// are searched as a region of their own, with the part bounds (support is then judged on that
-  /// piece; what lies beside it stays the unknown neighbour's). Measured on the real YCB-V dev frames with the mug alone in the database: 0 of 8
-  /// found before, 6 of 8 with it (ADD-S; turned about its axis by 88 degrees on average, its
-  /// handle hidden), none false; on the real mOSD frames, which hold no mug, one detection (test33:
+  /// piece; what lies beside it stays the unknown neighbour's). Measured on the real YCB-V dev
+  /// frames with the mug alone in the database: 0 of 8 found before, 6 of 8 with it (ADD-S; turned
+  /// about its axis by 88 degrees on average, its handle hidden), none false; on the real mOSD frames, which hold no mug, one detection (test33:
   /// a cylinder of the mug's size, its handle side out of sight), where the eight HOPE objects still
   /// give none. Growing by 1 cm (ICP's last reach) gave better mug poses (17 degrees and 4 mm off
   /// on average, against 88 and 16 mm) but a false jug at 2 m in the simulated seed room, fitted
@@ -467,7 +467,8 @@ class Recognizer {
   std::optional<Detection> search(std::vector<Region>& regions, const FrameAndPlanes& frame, Recognition& out,
                                   std::optional<Detection>* partial = nullptr, bool votes = false,
                                   std::optional<Detection>* seed = nullptr) const;
-  // The points of `points` within SplitOptions::grow_reach_m of `seed`'s model, the piece of them it lies on (pose/points_on_model).
+  // The points of `points` within SplitOptions::grow_reach_m of `seed`'s model, the piece of them
+  // it lies on (pose/points_on_model).
   PointCloud grown_region(const PointCloud& points, const Detection& seed) const;
   // `partial`'s points taken out of `points` and the rest searched; when the rest gives a detection
   // and `partial`, verified again on the points that one leaves, passes `verify`, both are added,
