@@ -49,9 +49,10 @@ NearestGrid::NearestGrid(const KdTree& tree, std::span<const Eigen::Vector3f> po
     : tree_(&tree), points_(points) {
   const Extent e = extent(points, cell_m, margin_m);
   if (e.too_many > 0) throw Error(fmt::format("nearest grid: {:.0f} cells of {} m is too many; use larger cells", e.too_many, cell_m));
+  cell_ = cell_m;
+  margin_ = margin_m;
   if (e.cells() == 0 || tree.size() == 0) return;  // every query finds nothing
   origin_ = e.origin;
-  cell_ = cell_m;
   inv_cell_ = 1.0f / cell_m;
   nx_ = e.nx;
   ny_ = e.ny;

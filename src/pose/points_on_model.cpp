@@ -3,51 +3,53 @@
 #include <algorithm>
 #include <cmath>
 
+#include "viewpose/segment/segmentation.hpp"
+
 namespace viewpose {
 
 std::vector<NearModel> near_model(std::span<const Eigen::Vector3f> points, const IcpTarget& model,
                                   const Transform& T_camera_object, float reach_m, const VerifyOptions& verify,
                                   const IcpOptions& icp) {
-  std::vector<NearModel> out(points.size(), NearModel::far);
-  if (model.points.empty() || !(reach_m > 0)) return out;
+  std::vector<NearModel> nearness(points.size(), NearModel::far);
+  if (model.points.empty() || !(reach_m > 0)) return nearness;
   const Transform T_object_camera = T_camera_object.inverse();
+  // The grid's own sizes, whoever made it: a cell's point is at most a cell diagonal farther than
+  // the nearest, and outside the grid a point is farther than its margin from every model point.
   const NearestGrid* grid = model.grid(icp.grid_cell_m, icp.reach_m());
-  // A grid cell's point is at most a cell diagonal farther than the nearest one; outside the grid a
-  // point is farther than its margin (ICP's reach) from every model point.
-  const float slack = grid ? std::sqrt(3.0f) * icp.grid_cell_m : 0.0f;
-  const bool outside_is_far = icp.reach_m() >= reach_m;
+  const float slack = grid ? std::sqrt(3.0f) * grid->cell_m() : 0.0f;
+  const bool outside_is_far = grid && grid->margin_m() >= reach_m;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3f& p = points[i];
-    if (!p.allFinite()) continue;
-    const float tolerance = std::min(reach_m, depth_tolerance(p.z(), verify));
-    const Eigen::Vector3f q = (T_object_camera * p.cast<double>()).cast<float>();
+    const Eigen::Vector3f& p_camera = points[i];
+    if (!p_camera.allFinite()) continue;
+    const float tolerance = std::min(reach_m, depth_tolerance(p_camera.z(), verify));
+    const Eigen::Vector3f p_object = (T_object_camera * p_camera.cast<double>()).cast<float>();
     std::uint32_t index = 0;
     float d2 = 0;
-    bool found = grid && grid->nearest(q, index, d2);
+    bool found = grid && grid->nearest(p_object, index, d2);
     if (grid && !found && outside_is_far) continue;
     if (found && d2 > (reach_m + slack) * (reach_m + slack)) continue;
     // The grid's distance is to a model point, so at least the nearest's: within the tolerance it
     // decides; beyond it the tree says exactly.
-    if (!found || d2 > tolerance * tolerance) found = model.tree.nearest(q, index, d2);
+    if (!found || d2 > tolerance * tolerance) found = model.tree.nearest(p_object, index, d2);
     if (!found || d2 > reach_m * reach_m) continue;
-    out[i] = d2 <= tolerance * tolerance ? NearModel::on : NearModel::near;
+    nearness[i] = d2 <= tolerance * tolerance ? NearModel::on : NearModel::near;
   }
-  return out;
+  return nearness;
 }
 
 PointCloud piece_on_model(const PointCloud& points, const IcpTarget& model, const Transform& T_camera_object,
                           float reach_m, const VerifyOptions& verify, const IcpOptions& icp,
                           const ClusterOptions& clusters) {
-  const std::vector<NearModel> near = near_model(points.points, model, T_camera_object, reach_m, verify, icp);
+  const std::vector<NearModel> nearness = near_model(points.points, model, T_camera_object, reach_m, verify, icp);
   std::vector<std::uint32_t> within;
-  for (std::uint32_t i = 0; i < near.size(); ++i) {
-    if (near[i] != NearModel::far) within.push_back(i);
+  for (std::uint32_t i = 0; i < nearness.size(); ++i) {
+    if (nearness[i] != NearModel::far) within.push_back(i);
   }
   if (within.size() < clusters.min_points) return {};
-  const std::vector<Cluster> pieces = euclidean_clusters(points, within, clusters);
+  const std::vector<Cluster> pieces = euclidean_clusters(points, within, clusters);  // (indices into `points`)
   if (pieces.empty()) return {};
   const auto on = [&](const Cluster& c) {
-    return std::count_if(c.begin(), c.end(), [&](std::uint32_t k) { return near[k] == NearModel::on; });
+    return std::count_if(c.begin(), c.end(), [&](std::uint32_t k) { return nearness[k] == NearModel::on; });
   };
   const auto best = std::max_element(pieces.begin(), pieces.end(), [&](const Cluster& a, const Cluster& b) {
     const auto on_a = on(a), on_b = on(b);

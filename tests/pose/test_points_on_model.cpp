@@ -1,6 +1,8 @@
 #include "viewpose/pose/points_on_model.hpp"
 
+#include <array>
 #include <cmath>
+#include <utility>
 #include <limits>
 #include <random>
 
@@ -9,12 +11,13 @@
 namespace viewpose {
 namespace {
 
-// A square plate 10 x 10 cm in the object's xy plane, a point every 2 mm, its normals along +z.
-IcpTarget plate() {
+// A square plate 10 x 10 cm in the object's xy plane, a point every `spacing_m`, its normals along +z.
+IcpTarget plate(float spacing_m) {
   std::vector<Eigen::Vector3f> points, normals;
-  for (int i = -25; i <= 25; ++i)
-    for (int j = -25; j <= 25; ++j) {
-      points.emplace_back(0.002f * static_cast<float>(i), 0.002f * static_cast<float>(j), 0.0f);
+  const int n = static_cast<int>(std::lround(0.05f / spacing_m));
+  for (int i = -n; i <= n; ++i)
+    for (int j = -n; j <= n; ++j) {
+      points.emplace_back(spacing_m * static_cast<float>(i), spacing_m * static_cast<float>(j), 0.0f);
       normals.emplace_back(0.0f, 0.0f, 1.0f);
     }
   return IcpTarget(std::move(points), std::move(normals));
@@ -31,85 +34,128 @@ Eigen::Vector3f in_camera(const Transform& T_camera_object, float x, float y, fl
   return (T_camera_object * Eigen::Vector3d(x, y, z)).cast<float>();
 }
 
-TEST(PointsOnModel, EachPointIsFarNearOrOnAsTheExactNearestModelPointSays) {
-  const IcpTarget model = plate();
-  const Transform T = plate_pose();
-  const VerifyOptions verify;
-  const IcpOptions icp;
-  const float reach = 0.02f;
-  // Points around the plate, out to 5 cm beyond it each way (the grid's margin is ICP's 4 cm).
+// Points around the plate out to 5 cm each way beyond it (past the grid's 4 cm margin), and the
+// exact distance of each to the nearest model point (brute force). Seeded: the same points each run.
+struct Sampled {
+  std::vector<Eigen::Vector3f> points_camera;
+  std::vector<float> distance_m;
+};
+Sampled sample_around(const IcpTarget& model, const Transform& T_camera_object, std::size_t count) {
   std::mt19937 random(7);
   std::uniform_real_distribution<float> xy(-0.1f, 0.1f), z(-0.05f, 0.05f);
-  std::vector<Eigen::Vector3f> points;
-  std::vector<NearModel> expected;
-  while (points.size() < 4000) {
-    const Eigen::Vector3f q(xy(random), xy(random), z(random));
-    const Eigen::Vector3f p = in_camera(T, q.x(), q.y(), q.z());
+  Sampled s;
+  while (s.points_camera.size() < count) {
+    const Eigen::Vector3f p_object(xy(random), xy(random), z(random));
     float d2 = std::numeric_limits<float>::max();
-    for (const Eigen::Vector3f& m : model.points) d2 = std::min(d2, (m - q).squaredNorm());
-    const float d = std::sqrt(d2), tolerance = std::min(reach, depth_tolerance(p.z(), verify));
-    if (std::abs(d - reach) < 1e-4f || std::abs(d - tolerance) < 1e-4f) continue;  // (no rounding's call)
-    points.push_back(p);
-    expected.push_back(d > reach ? NearModel::far : d > tolerance ? NearModel::near : NearModel::on);
+    for (const Eigen::Vector3f& m : model.points) d2 = std::min(d2, (m - p_object).squaredNorm());
+    s.points_camera.push_back(in_camera(T_camera_object, p_object.x(), p_object.y(), p_object.z()));
+    s.distance_m.push_back(std::sqrt(d2));
   }
-  const std::vector<NearModel> got = near_model(points, model, T, reach, verify, icp);
-  ASSERT_EQ(got.size(), points.size());
-  std::size_t counts[3] = {0, 0, 0};
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    EXPECT_EQ(got[i], expected[i]) << "point " << i;
-    ++counts[static_cast<int>(expected[i])];
+  return s;
+}
+
+// What an exact search says of a point at distance d and depth z.
+NearModel exactly(float d, float z, float reach_m, const VerifyOptions& verify) {
+  const float tolerance = std::min(reach_m, depth_tolerance(z, verify));
+  return d > reach_m ? NearModel::far : d > tolerance ? NearModel::near : NearModel::on;
+}
+
+// near_model against the exact answer for every sampled point, but those within 0.1 mm of the reach
+// or the tolerance (too close for float rounding to say which side they lie on); the counts of each
+// kind expected.
+std::array<std::size_t, 3> expect_exact(const IcpTarget& model, const Transform& T_camera_object, const Sampled& s,
+                                        float reach_m, const IcpOptions& icp) {
+  const VerifyOptions verify;
+  const std::vector<NearModel> got = near_model(s.points_camera, model, T_camera_object, reach_m, verify, icp);
+  EXPECT_EQ(got.size(), s.points_camera.size());
+  std::array<std::size_t, 3> counts{};
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    const float d = s.distance_m[i], z = s.points_camera[i].z();
+    const float tolerance = std::min(reach_m, depth_tolerance(z, verify));
+    if (std::abs(d - reach_m) < 1e-4f || std::abs(d - tolerance) < 1e-4f) continue;
+    const NearModel expected = exactly(d, z, reach_m, verify);
+    EXPECT_EQ(got[i], expected) << "point " << i << " at " << d << " m";
+    ++counts[static_cast<std::size_t>(expected)];
   }
-  // Every kind is tested, many times over.
-  for (const std::size_t n : counts) EXPECT_GT(n, 200u);
-  // A reach beyond the grid's margin is answered by the tree, as exactly.
-  const float wide = 0.06f;
-  const std::vector<NearModel> wider = near_model(points, model, T, wide, verify, icp);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (expected[i] == NearModel::far) continue;
-    EXPECT_EQ(wider[i], expected[i] == NearModel::on ? NearModel::on : NearModel::near);
+  return counts;
+}
+
+TEST(PointsOnModel, EachPointIsFarNearOrOnAsTheExactNearestModelPointSays) {
+  // Model points 1 cm apart: the grid's point (3 mm cells) is often not the nearest, by up to its
+  // slack, so both the grid's answers and the tree's are tested.
+  const IcpTarget model = plate(0.01f);
+  const Transform T_camera_object = plate_pose();
+  const Sampled s = sample_around(model, T_camera_object, 20000);
+  const std::array<std::size_t, 3> counts = expect_exact(model, T_camera_object, s, 0.02f, IcpOptions{});
+  for (const std::size_t n : counts) EXPECT_GT(n, 1000u);
+  // A reach beyond the grid's 4 cm margin: the points outside the grid are looked up in the tree.
+  const std::array<std::size_t, 3> wide = expect_exact(model, T_camera_object, s, 0.06f, IcpOptions{});
+  std::size_t beyond_margin = 0;
+  for (const float d : s.distance_m) beyond_margin += d > 0.045f && d < 0.06f;
+  EXPECT_GT(beyond_margin, 1000u);
+  EXPECT_GT(wide[static_cast<std::size_t>(NearModel::near)], counts[static_cast<std::size_t>(NearModel::near)] + beyond_margin / 2);
+}
+
+TEST(PointsOnModel, AGridMadeBeforeWithOtherSizesGivesTheSameAnswers) {
+  // ICP made the model's grid first, with other sizes than the options say: its own slack and
+  // margin decide what the grid may answer. Coarse cells over sparse points (3 cm apart), whose
+  // cell points are often far from the nearest; and a margin narrower than the reach.
+  const Transform T_camera_object = plate_pose();
+  for (const auto& [cell_m, margin_m] : {std::pair{0.02f, 0.05f}, std::pair{0.01f, 0.01f}}) {
+    const IcpTarget model = plate(0.03f);
+    ASSERT_NE(model.grid(cell_m, margin_m), nullptr);
+    const Sampled s = sample_around(model, T_camera_object, 20000);
+    const std::array<std::size_t, 3> counts = expect_exact(model, T_camera_object, s, 0.02f, IcpOptions{});
+    for (const std::size_t n : counts) EXPECT_GT(n, 200u) << cell_m << " m cells, " << margin_m << " m margin";
   }
 }
 
 TEST(PointsOnModel, NoReachAndPointsWithoutDepthAreFar) {
-  const IcpTarget model = plate();
-  const Transform T = plate_pose();
+  const IcpTarget model = plate(0.002f);
+  const Transform T_camera_object = plate_pose();
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  const std::vector<Eigen::Vector3f> points = {in_camera(T, 0, 0, 0), Eigen::Vector3f(nan, nan, nan)};
-  const std::vector<NearModel> got = near_model(points, model, T, 0.02f, {}, {});
+  const std::vector<Eigen::Vector3f> points = {in_camera(T_camera_object, 0, 0, 0), Eigen::Vector3f(nan, nan, nan)};
+  const std::vector<NearModel> got = near_model(points, model, T_camera_object, 0.02f, {}, {});
   EXPECT_EQ(got[0], NearModel::on);
   EXPECT_EQ(got[1], NearModel::far);
-  for (const NearModel n : near_model(points, model, T, 0.0f, {}, {})) EXPECT_EQ(n, NearModel::far);
+  for (const float reach : {0.0f, -0.01f, nan}) {
+    for (const NearModel n : near_model(points, model, T_camera_object, reach, {}, {})) EXPECT_EQ(n, NearModel::far);
+  }
 }
 
 TEST(PointsOnModel, ThePieceGrownIsTheOneTheModelLiesOnNotTheLargest) {
-  // A part of the plate seen (its left end, on the model), and beside its right end, 3 cm to the
-  // side of the part, a neighbour's surface 1.5 cm behind the plate: within the reach, beyond the
-  // tolerance, four times as many points, and a piece of its own. Farther off, a wall.
-  const IcpTarget model = plate();
-  const Transform T = plate_pose();
+  // A part of the plate seen (its left end, on the model), and behind the plate's right half, 3 cm
+  // to the side of the part, a neighbour's surface 1.5 cm behind the plate: within the reach,
+  // beyond the tolerance, four times as many points, and a piece of its own. Farther behind, a
+  // wall; it comes first in the region, so that the pieces' indices are not their positions.
+  const IcpTarget model = plate(0.002f);
+  const Transform T_camera_object = plate_pose();
   const VerifyOptions verify;
   ASSERT_LT(depth_tolerance(1.1f, verify), 0.015f);
   PointCloud region;
+  const auto add = [&](float x, float y, float z) { region.points.push_back(in_camera(T_camera_object, x, y, z)); };
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) add(-0.05f + 0.0025f * static_cast<float>(i), -0.05f + 0.0025f * static_cast<float>(j), -0.06f);
+  const std::size_t part_from = region.points.size();
   for (int i = 0; i < 15; ++i)
-    for (int j = 0; j < 10; ++j) region.points.push_back(in_camera(T, -0.05f + 0.002f * static_cast<float>(i), 0.002f * static_cast<float>(j), 0));
+    for (int j = 0; j < 10; ++j) add(-0.05f + 0.002f * static_cast<float>(i), 0.002f * static_cast<float>(j), 0);
+  const std::size_t neighbour_from = region.points.size();
   for (int i = 0; i < 40; ++i)
-    for (int j = 0; j < 15; ++j) region.points.push_back(in_camera(T, 0.01f + 0.001f * static_cast<float>(i), 0.001f * static_cast<float>(j), -0.015f));
-  for (int i = 0; i < 40; ++i)
-    for (int j = 0; j < 40; ++j) region.points.push_back(in_camera(T, -0.05f + 0.0025f * static_cast<float>(i), -0.05f + 0.0025f * static_cast<float>(j), -0.06f));
+    for (int j = 0; j < 15; ++j) add(0.01f + 0.001f * static_cast<float>(i), 0.001f * static_cast<float>(j), -0.015f);
   region.width = static_cast<int>(region.points.size());
   const ClusterOptions clusters;
-  const PointCloud piece = piece_on_model(region, model, T, 0.02f, verify, {}, clusters);
-  ASSERT_EQ(piece.size(), 150u);
-  for (std::size_t k = 0; k < piece.size(); ++k) EXPECT_EQ(piece.points[k], region.points[k]);
+  const PointCloud piece = piece_on_model(region, model, T_camera_object, 0.02f, verify, {}, clusters);
+  ASSERT_EQ(piece.size(), neighbour_from - part_from);
+  for (std::size_t k = 0; k < piece.size(); ++k) EXPECT_EQ(piece.points[k], region.points[part_from + k]);
   // Without the part, the neighbour's surface is all there is within reach: that piece.
   PointCloud beside;
-  beside.points.assign(region.points.begin() + 150, region.points.end());
+  beside.points.assign(region.points.begin() + static_cast<std::ptrdiff_t>(neighbour_from), region.points.end());
   beside.width = static_cast<int>(beside.points.size());
-  EXPECT_EQ(piece_on_model(beside, model, T, 0.02f, verify, {}, clusters).size(), 600u);
+  EXPECT_EQ(piece_on_model(beside, model, T_camera_object, 0.02f, verify, {}, clusters).size(), 600u);
   // Pieces smaller than the clusters' least: none.
   ClusterOptions fewer = clusters;
   fewer.min_points = 1000;
-  EXPECT_EQ(piece_on_model(region, model, T, 0.02f, verify, {}, fewer).size(), 0u);
+  EXPECT_EQ(piece_on_model(region, model, T_camera_object, 0.02f, verify, {}, fewer).size(), 0u);
 }
 
 }  // namespace

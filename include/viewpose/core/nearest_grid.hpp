@@ -59,6 +59,11 @@ class NearestGrid {
     index = stored - 1;
     return true;
   }
+  /// The sizes it was made with: a query's cell point is at most a cell diagonal (sqrt(3) cell_m)
+  /// farther than the nearest point, and a query outside the grid lies farther than margin_m from
+  /// every point.
+  float cell_m() const { return cell_; }
+  float margin_m() const { return margin_; }
   /// Cells filled so far.
   std::size_t filled() const;
   /// Every cell, x fastest, then y, then z: 0 where not filled yet, else the held point's index + 1.
@@ -84,7 +89,7 @@ class NearestGrid {
   const KdTree* tree_;
   std::span<const Eigen::Vector3f> points_;
   Eigen::Vector3f origin_ = Eigen::Vector3f::Zero();
-  float cell_ = 1, inv_cell_ = 1;
+  float cell_ = 1, inv_cell_ = 1, margin_ = 0;
   std::uint32_t nx_ = 0, ny_ = 0, nz_ = 0;
   std::unique_ptr<std::atomic<std::uint32_t>[], FreeDeleter> cells_;  // 0: not filled yet; else index + 1
 };
