@@ -61,14 +61,20 @@ class Correspondences {
     pairs_.resize(source.size());
     index_.resize(source.size());
     const std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+    for (std::size_t i = 0; i < source.size(); ++i) pairs_[i].p = R * source[i] + t;
+    // Every cell asked for before any is read, and every surfel before any is copied: the
+    // processor then waits on many misses at once instead of on each in turn (the same results).
+    if (grid_) {
+      for (std::size_t i = 0; i < source.size(); ++i) grid_->prefetch(pairs_[i].p);
+    }
+    const std::vector<IcpTarget::Surfel>& surfels = target_.surfels();
     for (std::size_t i = 0; i < source.size(); ++i) {
-      pairs_[i].p = R * source[i] + t;
       std::uint32_t k = none;
       float unused;
       const bool found = source[i].allFinite() && (grid_ ? grid_->held(pairs_[i].p, k) : target_.tree.nearest(pairs_[i].p, k, unused));
       index_[i] = found ? k : none;
+      if (found) __builtin_prefetch(&surfels[k]);
     }
-    const std::vector<IcpTarget::Surfel>& surfels = target_.surfels();
     for (std::size_t i = 0; i < source.size(); ++i) {
       if (index_[i] != none) pairs_[i].q = surfels[index_[i]];
       else pairs_[i].q.point = pairs_[i].q.normal = Eigen::Vector3f::Constant(NAN);
@@ -82,6 +88,40 @@ class Correspondences {
   std::vector<Pair> pairs_;
   std::vector<std::uint32_t> index_;
 };
+
+// The sums of a Gauss-Newton step's normal equations: the upper triangle of J^T J (all the solve
+// reads) and J^T r, over correspondences with J = (p x n, n). Held and added as plain scalars, each
+// entry named: built as an Eigen vector, J was stored in two halves and read back whole, which the
+// processor cannot forward from its stores, and that wait was a third of ICP's time (perf annotate
+// on real frames); a loop over the entries was not unrolled, and a rank update's library call cost
+// more still. Each entry is the same sum, in the same order, as the whole outer product's.
+struct NormalEquations {
+  double h00 = 0, h01 = 0, h02 = 0, h03 = 0, h04 = 0, h05 = 0, h11 = 0, h12 = 0, h13 = 0, h14 = 0, h15 = 0;
+  double h22 = 0, h23 = 0, h24 = 0, h25 = 0, h33 = 0, h34 = 0, h35 = 0, h44 = 0, h45 = 0, h55 = 0;
+  double g0 = 0, g1 = 0, g2 = 0, g3 = 0, g4 = 0, g5 = 0;
+  // The whole matrix (the lower triangle mirrors the upper) and the right-hand side.
+  void unpack(Eigen::Matrix<double, 6, 6>& JtJ, Eigen::Matrix<double, 6, 1>& Jtr) const {
+    JtJ(0, 0) = h00, JtJ(0, 1) = h01, JtJ(0, 2) = h02, JtJ(0, 3) = h03, JtJ(0, 4) = h04, JtJ(0, 5) = h05;
+    JtJ(1, 1) = h11, JtJ(1, 2) = h12, JtJ(1, 3) = h13, JtJ(1, 4) = h14, JtJ(1, 5) = h15;
+    JtJ(2, 2) = h22, JtJ(2, 3) = h23, JtJ(2, 4) = h24, JtJ(2, 5) = h25;
+    JtJ(3, 3) = h33, JtJ(3, 4) = h34, JtJ(3, 5) = h35;
+    JtJ(4, 4) = h44, JtJ(4, 5) = h45;
+    JtJ(5, 5) = h55;
+    JtJ.triangularView<Eigen::StrictlyLower>() = JtJ.transpose();
+    Jtr << g0, g1, g2, g3, g4, g5;
+  }
+};
+
+inline void add_normal_equations(const Eigen::Vector3d& c, const Eigen::Vector3d& n, double r, NormalEquations& s) {
+  const double j0 = c.x(), j1 = c.y(), j2 = c.z(), j3 = n.x(), j4 = n.y(), j5 = n.z();
+  s.h00 += j0 * j0, s.h01 += j0 * j1, s.h02 += j0 * j2, s.h03 += j0 * j3, s.h04 += j0 * j4, s.h05 += j0 * j5;
+  s.h11 += j1 * j1, s.h12 += j1 * j2, s.h13 += j1 * j3, s.h14 += j1 * j4, s.h15 += j1 * j5;
+  s.h22 += j2 * j2, s.h23 += j2 * j3, s.h24 += j2 * j4, s.h25 += j2 * j5;
+  s.h33 += j3 * j3, s.h34 += j3 * j4, s.h35 += j3 * j5;
+  s.h44 += j4 * j4, s.h45 += j4 * j5;
+  s.h55 += j5 * j5;
+  s.g0 += j0 * r, s.g1 += j1 * r, s.g2 += j2 * r, s.g3 += j3 * r, s.g4 += j4 * r, s.g5 += j5 * r;
+}
 
 }  // namespace
 
@@ -115,8 +155,7 @@ IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const 
     for (int it = 0; it < o.max_iterations_per_stage; ++it) {
       ++result.iterations;
       // Gauss-Newton on r = n . (T s - q), with T perturbed by a small twist (omega, v) on the left.
-      Eigen::Matrix<double, 6, 6> JtJ = Eigen::Matrix<double, 6, 6>::Zero();
-      Eigen::Matrix<double, 6, 1> Jtr = Eigen::Matrix<double, 6, 1>::Zero();
+      NormalEquations sums;
       std::size_t count = 0;
       double sum_r2 = 0;
       for (const auto& [p, q] : correspondences.find(source, result.T_target_source)) {
@@ -125,12 +164,7 @@ IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const 
         if (!n.allFinite()) continue;
         const Eigen::Vector3d pd = p.cast<double>();
         const double r = n.dot(pd - q.point.cast<double>());
-        Eigen::Matrix<double, 6, 1> J;
-        J << pd.cross(n), n;
-        // The whole outer product, inlined: the same sums as a rank update of the upper triangle,
-        // whose library call cost more than the arithmetic.
-        JtJ.noalias() += J * J.transpose();
-        Jtr.noalias() += J * r;
+        add_normal_equations(pd.cross(n), n, r, sums);
         sum_r2 += r * r;
         ++count;
       }
@@ -144,6 +178,9 @@ IcpResult icp_point_to_plane(std::span<const Eigen::Vector3f> all_source, const 
         break;
       }
       previous_rmse = result.inlier_rmse;
+      Eigen::Matrix<double, 6, 6> JtJ;
+      Eigen::Matrix<double, 6, 1> Jtr;
+      sums.unpack(JtJ, Jtr);
       const Eigen::Matrix<double, 6, 1> x = JtJ.selfadjointView<Eigen::Upper>().ldlt().solve(-Jtr);
       if (!x.allFinite()) return result;
       const Eigen::Vector3d omega = x.head<3>(), v = x.tail<3>();
