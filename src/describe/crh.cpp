@@ -82,32 +82,39 @@ std::vector<float> crh_roll_angles(const Crh& view, const Crh& scene, const Roll
   // The inverse transform's real part at each lag. Only the harmonics present (0 to 44 and the
   // Nyquist term at 89, 46 of 180) take part: the sum over the others adds zeros. Each present
   // harmonic adds p.re cos - p.im sin (the real part of p * root, as std::complex computes it,
-  // without its checks for infinities) to every lag, from a table of its roots row by row: each
-  // lag's sum still adds the harmonics in order, and the rows are read in a stream the compiler
-  // vectorizes (a table of the 180 roots indexed by k n mod 180 read six times slower).
+  // without its checks for infinities) to every lag, from a table of its roots row by row, read
+  // in a stream the compiler vectorizes (a table of the 180 roots indexed by k n mod 180 read six
+  // times slower). Half a turn on, a harmonic's root is the same times (-1)^k: the even
+  // harmonics' sum E and the odd ones' O over the first 90 lags give all 180, E + O and E - O,
+  // for half the products. (Each of E and O adds its harmonics in order; the test holds the
+  // angles to the textbook sum's.)
   constexpr int kHarmonics = kBins / 2 + 1;
+  constexpr int kHalf = kLags / 2;
   struct Table {
-    std::array<std::array<double, kLags>, kHarmonics> cos{}, sin{};
+    std::array<std::array<double, kHalf>, kHarmonics> cos{}, sin{};
   };
   static const Table table = [] {
     Table t;
     for (int row = 0; row < kHarmonics; ++row)
-      for (int n = 0; n < kLags; ++n) {
+      for (int n = 0; n < kHalf; ++n) {
         const std::complex<double> root = std::polar(1.0, 2 * kPi * ((harmonic(row) * n) % kLags) / kLags);
         t.cos[static_cast<std::size_t>(row)][static_cast<std::size_t>(n)] = root.real();
         t.sin[static_cast<std::size_t>(row)][static_cast<std::size_t>(n)] = root.imag();
       }
     return t;
   }();
-  std::array<double, kLags> re{};
+  std::array<double, kHalf> even{}, odd{};
   for (int row = 0; row < kHarmonics; ++row) {
     const std::complex<double>& p = product[static_cast<std::size_t>(harmonic(row))];
     if (p == 0.0) continue;
     const double p_re = p.real(), p_im = p.imag();
-    const std::array<double, kLags>& c = table.cos[static_cast<std::size_t>(row)];
-    const std::array<double, kLags>& si = table.sin[static_cast<std::size_t>(row)];
-    for (std::size_t n = 0; n < kLags; ++n) re[n] += p_re * c[n] - p_im * si[n];
+    const std::array<double, kHalf>& c = table.cos[static_cast<std::size_t>(row)];
+    const std::array<double, kHalf>& si = table.sin[static_cast<std::size_t>(row)];
+    std::array<double, kHalf>& sum = harmonic(row) % 2 == 0 ? even : odd;
+    for (std::size_t n = 0; n < kHalf; ++n) sum[n] += p_re * c[n] - p_im * si[n];
   }
+  std::array<double, kLags> re{};
+  for (std::size_t n = 0; n < kHalf; ++n) re[n] = even[n] + odd[n], re[n + kHalf] = even[n] - odd[n];
   // The lags best first, as a stable sort by value would order them (ties: the smaller lag first);
   // only the first `scan` are looked at.
   const int scan = std::clamp(static_cast<int>(options.quantile * static_cast<float>(kLags)), 0, kLags);
