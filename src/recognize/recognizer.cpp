@@ -653,26 +653,7 @@ PointCloud Recognizer::grown_region(const PointCloud& points, const Detection& s
 }
 
 std::vector<char> Recognizer::explained_points(const Detection& detection, const PointCloud& points) const {
-  std::vector<char> explained(points.size(), 0);
-  const Transform T_object_camera = detection.T_camera_object.inverse();
-  const IcpTarget& model = icp_target(detection.object_index);
-  const NearestGrid* grid = model.grid(options_.icp.grid_cell_m, options_.icp.reach_m());
-  const float slack = grid ? std::sqrt(3.0f) * options_.icp.grid_cell_m : 0.0f;  // how far off the grid may be
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3f& p = points.points[i];
-    const float tolerance = depth_tolerance(p.z(), options_.verify);
-    const Eigen::Vector3f q = (T_object_camera * p.cast<double>()).cast<float>();
-    std::uint32_t index = 0;
-    float d2 = 0;
-    // The grid answers most points; the exact tree only those it leaves near the tolerance.
-    if (grid && (!grid->nearest(q, index, d2) || d2 > (tolerance + slack) * (tolerance + slack))) continue;
-    if (grid && d2 <= tolerance * tolerance) {
-      explained[i] = 1;
-      continue;
-    }
-    explained[i] = model.tree.nearest(q, index, d2) && d2 <= tolerance * tolerance;
-  }
-  return explained;
+  return on_model(points.points, icp_target(detection.object_index), detection.T_camera_object, options_.verify, options_.icp);
 }
 
 std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const Hypothesis> hypotheses,

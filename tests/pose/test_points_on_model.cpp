@@ -110,6 +110,68 @@ TEST(PointsOnModel, AGridMadeBeforeWithOtherSizesGivesTheSameAnswers) {
   }
 }
 
+// on_model against the exact answer (within the depth tolerance of the nearest model point) for
+// every sampled point but those within 0.1 mm of the tolerance; how many are on it.
+std::size_t expect_on_exactly(const IcpTarget& model, const Transform& T_camera_object, const Sampled& s) {
+  const VerifyOptions verify;
+  const std::vector<char> got = on_model(s.points_camera, model, T_camera_object, verify, IcpOptions{});
+  EXPECT_EQ(got.size(), s.points_camera.size());
+  std::size_t on = 0;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    const float tolerance = depth_tolerance(s.points_camera[i].z(), verify);
+    if (std::abs(s.distance_m[i] - tolerance) < 1e-4f) continue;
+    const bool expected = s.distance_m[i] <= tolerance;
+    EXPECT_EQ(got[i] != 0, expected) << "point " << i << " at " << s.distance_m[i] << " m";
+    on += expected;
+  }
+  return on;
+}
+
+TEST(PointsOnModel, OnTheModelIsWithinTheToleranceOfTheExactNearestModelPoint) {
+  // The same plates and grids as above: the grid's slack, the tree's answers near the tolerance,
+  // and a grid made first with a margin (1 cm) narrower than the largest tolerance (2 cm), outside
+  // which a point may still be on the model. Points are sampled near the plate, where most of
+  // them are within a tolerance (2-3 mm at 1 m) or a few cells of it.
+  const Transform T_camera_object = plate_pose();
+  const auto near_plate = [&](const IcpTarget& model) {
+    Sampled s;
+    std::mt19937 random(11);
+    std::uniform_real_distribution<float> xy(-0.06f, 0.06f), z(-0.012f, 0.012f);
+    while (s.points_camera.size() < 20000) {
+      const Eigen::Vector3f p(xy(random), xy(random), z(random));
+      float d2 = std::numeric_limits<float>::max();
+      for (const Eigen::Vector3f& m : model.points) d2 = std::min(d2, (m - p).squaredNorm());
+      s.points_camera.push_back(in_camera(T_camera_object, p.x(), p.y(), p.z()));
+      s.distance_m.push_back(std::sqrt(d2));
+    }
+    return s;
+  };
+  {
+    const IcpTarget model = plate(0.01f);
+    const Sampled s = near_plate(model);
+    const std::size_t on = expect_on_exactly(model, T_camera_object, s);
+    EXPECT_GT(on, 1000u);
+    EXPECT_LT(on, s.points_camera.size() - 1000u);
+  }
+  // Cells wider than the plate's spacing: a cell's point is often not the nearest one.
+  for (const auto& [cell_m, margin_m] : {std::pair{0.02f, 0.05f}, std::pair{0.01f, 0.01f}}) {
+    const IcpTarget model = plate(0.005f);
+    ASSERT_NE(model.grid(cell_m, margin_m), nullptr);
+    const Sampled s = near_plate(model);
+    EXPECT_GT(expect_on_exactly(model, T_camera_object, s), 1000u) << cell_m << " m cells, " << margin_m << " m margin";
+  }
+  // A far tolerance (2 cm, the cap) beyond a 1 cm margin: a point 1.5 cm off a plate 3 m away.
+  const IcpTarget model = plate(0.002f);
+  ASSERT_NE(model.grid(0.003f, 0.01f), nullptr);
+  const Transform far = make_transform(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 3.0));
+  const VerifyOptions verify;
+  ASSERT_GT(depth_tolerance(3.0f, verify), 0.015f);
+  const std::vector<Eigen::Vector3f> points = {in_camera(far, 0, 0, 0.015f), in_camera(far, 0, 0, 0.03f)};
+  const std::vector<char> got = on_model(points, model, far, verify, {});
+  EXPECT_EQ(got[0], 1);
+  EXPECT_EQ(got[1], 0);
+}
+
 TEST(PointsOnModel, NoReachAndPointsWithoutDepthAreFar) {
   const IcpTarget model = plate(0.002f);
   const Transform T_camera_object = plate_pose();
@@ -121,6 +183,8 @@ TEST(PointsOnModel, NoReachAndPointsWithoutDepthAreFar) {
   for (const float reach : {0.0f, -0.01f, nan}) {
     for (const NearModel n : near_model(points, model, T_camera_object, reach, {}, {})) EXPECT_EQ(n, NearModel::far);
   }
+  const std::vector<char> on = on_model(points, model, T_camera_object, {}, {});
+  EXPECT_EQ(on, (std::vector<char>{1, 0}));
 }
 
 TEST(PointsOnModel, ThePieceGrownIsTheOneTheModelLiesOnNotTheLargest) {

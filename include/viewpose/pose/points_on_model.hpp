@@ -33,6 +33,14 @@ std::vector<NearModel> near_model(std::span<const Eigen::Vector3f> points, const
                                   const Transform& T_camera_object, float reach_m, const VerifyOptions& verify,
                                   const IcpOptions& icp);
 
+/// Whether each point (camera frame) lies on the model posed at T_camera_object: within
+/// verification's depth tolerance at its depth of the nearest model point (what a detection
+/// explains of its region). near_model with a reach of the tolerance, at a look-up's cost: the grid
+/// decides every point it can place within the tolerance or beyond it by more than its slack, the
+/// k-d tree the rest. Points without depth are not on it.
+std::vector<char> on_model(std::span<const Eigen::Vector3f> points, const IcpTarget& model, const Transform& T_camera_object,
+                           const VerifyOptions& verify, const IcpOptions& icp);
+
 /// The points within reach_m of the posed model, split into Euclidean pieces (`clusters`: pieces of
 /// fewer than min_points or more than max_points are none), and of them the piece holding most
 /// points on the model (ties: the larger), with the points' labels. Empty where there is no piece.
