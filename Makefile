@@ -6,7 +6,8 @@
 #   make test-thread    the same suite under ThreadSanitizer (clang, libomp with its Archer tool)
 #   make fuzz           build the libFuzzer targets (clang) and run each for FUZZ_SECONDS
 #   make check          all four, as CI runs them
-#   make bench          micro-benchmarks of each stage, then the pipeline over 100 frames
+#   make bench          micro-benchmarks of each stage, the pipeline over 100 simulated frames, then the
+#                       real frames of ../shared/data (scripts/bench-real.py; docs/results/bench_real.json)
 #   make bench-pcl      install PCL, and time the thesis's PCL pipeline beside ours, stage by stage
 #   make bench-opencv   install OpenCV's surface_matching, and set our point pair votes beside its PPF3DDetector
 #   make results        real frames, simulated rooms, the thesis's experiment; writes docs/RESULTS.md
@@ -71,8 +72,10 @@ fuzz:
 check: test test-sanitize test-thread fuzz
 
 bench: build
+	@scripts/install-deps.sh results
 	@./$(BUILD)/viewpose_bench
 	@./$(BUILD)/viewpose bench --frames 100
+	@/usr/bin/python3 scripts/bench-real.py
 
 bench-pcl: deps
 	@scripts/install-deps.sh pcl

@@ -357,7 +357,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                                 {"db_build_ms", db_build_ms}, {"db_load_ms", db_load_ms}, {"prepare_ms", prepare_ms}, {"load_processes", o->load}, {"detections", detections}, {"stages_ms", jstages}, {"fps", fps},
                                 {"hypotheses_median", hyp_med}, {"repeats_median", repeats_med}, {"icp_verify_per_hypothesis_ms", per_hyp}, {"match_per_cluster_ms", match_per_region},
                                 {"targets", targets}, {"right", found}, {"right_add", found_add}, {"wrong", wrong}, {"failed_frames", failed_frames}, {"cut_short", cut_short},
-                                {"peak_rss_mib", rss}};
+                                {"peak_rss_mib", rss}, {"frame_ms", stages.back().ms}, {"hypotheses", hypotheses}};
       write_file_atomic(o->json, j.dump(2) + "\n");
     }
     exit_code = 0;

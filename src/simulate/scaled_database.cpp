@@ -1,5 +1,6 @@
 #include "viewpose/simulate/scaled_database.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -13,11 +14,15 @@ ViewDatabase scaled_database(const ViewDatabase& db, std::size_t objects, std::u
   if (db.objects.empty()) return out;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // The originals keep their ids (a dataset's ground truth names them); the copies take new ones
+  // above them all.
+  int largest_id = 0;
+  for (const DatabaseObject& object : db.objects) largest_id = std::max(largest_id, object.id);
   for (std::size_t o = 0; o < objects; ++o) {
     const std::size_t source = o % db.objects.size();
     DatabaseObject object = db.objects[source];
-    object.id = static_cast<int>(o + 1);
     if (o >= db.objects.size()) {
+      object.id = largest_id + static_cast<int>(o - db.objects.size() + 1);
       object.name = fmt::format("{}_{}", object.name, o / db.objects.size());
       object.nearest_cells = std::vector<std::uint32_t>();  // freed (not cleared): a database this large stores few
     }

@@ -401,6 +401,24 @@ TEST(ViewIndex, ASmallDatabaseGivesExactlyTheExhaustiveSearchesMatches) {
   EXPECT_TRUE(ViewIndex(ViewDatabase{}).nearest(queries.views[0].vfh, 20).empty());
 }
 
+TEST(ScaledDatabase, TheOriginalsKeepTheirIdsAndEachCopyFollowsItsOriginal) {
+  // The jug (id 1) and the can (id 5), grown to five objects: the copies' ids are new (6, 7, 8),
+  // object k is a copy of object k mod 2 (bench counts a copy found as its original by that), and
+  // every view of a copy is its original's view, histogram reshaped.
+  const ViewDatabase& small = small_db();
+  const ViewDatabase db = scaled_database(small, 5, 4);
+  ASSERT_EQ(db.objects.size(), 5u);
+  const std::vector<int> ids = {1, 5, 6, 7, 8};
+  for (std::size_t k = 0; k < 5; ++k) {
+    EXPECT_EQ(db.objects[k].id, ids[k]) << k;
+    EXPECT_EQ(db.objects[k].diameter_m, small.objects[k % 2].diameter_m) << k;
+  }
+  ASSERT_EQ(db.views.size(), 5 * small.views.size() / 2);
+  for (const ViewEntry& v : db.views) ASSERT_LT(v.object, 5u);
+  for (std::size_t k = 0; k < small.views.size(); ++k) EXPECT_EQ(db.views[k].vfh, small.views[k].vfh) << "originals unchanged";
+  EXPECT_NE(db.views[small.views.size()].vfh, small.views[0].vfh) << "a copy's histogram is reshaped";
+}
+
 TEST(ViewIndex, ALargeDatabaseFindsNearlyAllOfTheTrueNearestViews) {
   // 400 objects x 20 views of real histograms (the jug's and the can's, reshaped per repeat).
   const ViewDatabase db = scaled_database(small_db(), 400, 4);
