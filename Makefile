@@ -72,10 +72,9 @@ fuzz:
 check: test test-sanitize test-thread fuzz
 
 bench: build
-	@scripts/install-deps.sh results
 	@./$(BUILD)/viewpose_bench
 	@./$(BUILD)/viewpose bench --frames 100
-	@/usr/bin/python3 scripts/bench-real.py
+	@/usr/bin/python3 scripts/bench-real.py --viewpose $(BUILD)/viewpose
 
 bench-pcl: deps
 	@scripts/install-deps.sh pcl

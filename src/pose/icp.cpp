@@ -65,7 +65,9 @@ class Correspondences {
     // Every cell asked for before any is read, and every surfel before any is copied: the
     // processor then waits on many misses at once instead of on each in turn (the same results).
     if (grid_) {
-      for (std::size_t i = 0; i < source.size(); ++i) grid_->prefetch(pairs_[i].p);
+      for (std::size_t i = 0; i < source.size(); ++i) {
+        if (source[i].allFinite()) grid_->prefetch(pairs_[i].p);
+      }
     }
     const std::vector<IcpTarget::Surfel>& surfels = target_.surfels();
     for (std::size_t i = 0; i < source.size(); ++i) {

@@ -180,6 +180,15 @@ TEST(NearestGrid, EmptyOrNonFinitePointsFindNothingAndBadSizesThrow) {
   EXPECT_TRUE(grid.nearest(Eigen::Vector3f(1, 2, 3.005f), i, d));
   EXPECT_FALSE(grid.nearest(Eigen::Vector3f(NAN, 2, 3), i, d));
   EXPECT_FALSE(grid.nearest(Eigen::Vector3f(1, 2, 3.5f), i, d));
+  // Far outside, or infinite: outside the grid, not a cell the float-to-integer cast made up (the
+  // sanitizer build checks the cast, in the look-up and in the prefetch).
+  for (const float far : {1e20f, -1e20f, INFINITY, -INFINITY}) {
+    EXPECT_FALSE(grid.nearest(Eigen::Vector3f(far, 2, 3), i, d)) << far;
+    EXPECT_FALSE(grid.nearest(Eigen::Vector3f(1, far, 3), i, d)) << far;
+    EXPECT_FALSE(grid.nearest(Eigen::Vector3f(1, 2, far), i, d)) << far;
+    grid.prefetch(Eigen::Vector3f(far, far, far));
+    grid.prefetch(Eigen::Vector3f(NAN, 2, 3));
+  }
   EXPECT_THROW(NearestGrid(one_tree, one, 0.0f, 0.01f), Error);
   EXPECT_THROW(NearestGrid(one_tree, one, 1e-6f, 10.0f), Error) << "a grid of 10^19 cells is refused, not allocated";
   EXPECT_EQ(NearestGrid::cell_count(one, 1e-6f, 10.0f), std::numeric_limits<std::size_t>::max()) << "counted, not thrown";

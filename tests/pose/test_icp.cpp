@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -74,6 +75,63 @@ TEST(Icp, GridAndTreeCorrespondencesBothRecoverAKnownPose) {
     EXPECT_LT((r.T_target_source.translation() - T_target_source_true.translation()).norm(), 0.001);
     EXPECT_LT(rotation_difference_deg(r.T_target_source.linear(), T_target_source_true.linear()), 0.3);
   }
+}
+
+TEST(Icp, OneStepIsTheGaussNewtonStepOfTheTextbookNormalEquations) {
+  // One step from a pose 1 cm and 6 degrees off, its correspondences the exact nearest (k-d tree):
+  // the step must be the one the whole outer products J J^T and J r give, summed with Eigen and
+  // solved here. (ICP sums them entry by entry, for speed; an entry wrong, or two swapped, moves it.)
+  std::vector<Eigen::Vector3f> all_points, all_normals, points, normals;
+  box_surface(all_points, all_normals);
+  // The box's edges and corners are sampled once per face: one point each (with its first face's
+  // normal), so that no two model points tie for nearest.
+  for (std::size_t i = 0; i < all_points.size(); ++i) {
+    const bool seen = std::any_of(points.begin(), points.end(), [&](const Eigen::Vector3f& q) { return (q - all_points[i]).norm() < 1e-5f; });
+    if (!seen) points.push_back(all_points[i]), normals.push_back(all_normals[i]);
+  }
+  const IcpTarget target(points, normals);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<float> noise(0.0f, 0.001f);
+  std::vector<Eigen::Vector3f> source;
+  for (std::size_t i = 0; i < points.size(); i += 17) source.push_back(points[i] + Eigen::Vector3f(noise(rng), noise(rng), noise(rng)));
+  ASSERT_LT(source.size(), 400u);  // every point takes part
+  const Transform start = make_transform(Eigen::AngleAxisd(0.1, Eigen::Vector3d(1, 2, -1).normalized()).toRotationMatrix(), {0.01, -0.004, 0.006});
+  IcpOptions o;
+  o.grid_cell_m = 0;
+  o.max_correspondence_m = {0.02f};
+  o.max_iterations_per_stage = 1;
+  const IcpResult r = icp_point_to_plane(source, target, start, o);
+  Eigen::Matrix<double, 6, 6> JtJ = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> Jtr = Eigen::Matrix<double, 6, 1>::Zero();
+  const Eigen::Matrix3f R = start.linear().cast<float>();
+  const Eigen::Vector3f t = start.translation().cast<float>();
+  std::size_t used = 0;
+  for (const Eigen::Vector3f& s : source) {
+    const Eigen::Vector3f p = R * s + t;
+    std::size_t nearest = 0;
+    for (std::size_t k = 1; k < points.size(); ++k) {
+      if ((points[k] - p).squaredNorm() < (points[nearest] - p).squaredNorm()) nearest = k;
+    }
+    if ((points[nearest] - p).squaredNorm() > 0.02f * 0.02f) continue;
+    const Eigen::Vector3d n = normals[nearest].cast<double>(), pd = p.cast<double>();
+    Eigen::Matrix<double, 6, 1> J;
+    J << pd.cross(n), n;
+    const double residual = n.dot(pd - points[nearest].cast<double>());
+    JtJ += J * J.transpose();
+    Jtr += J * residual;
+    ++used;
+  }
+  ASSERT_GT(used, 100u);
+  const Eigen::Matrix<double, 6, 1> x = JtJ.ldlt().solve(-Jtr);
+  Transform step = Transform::Identity();
+  step.linear() = Eigen::AngleAxisd(x.head<3>().norm(), x.head<3>().normalized()).toRotationMatrix();
+  step.translation() = x.tail<3>();
+  const Transform expected = step * start;
+  EXPECT_EQ(r.iterations, 1);
+  EXPECT_LT((r.T_target_source.translation() - expected.translation()).norm(), 1e-9);
+  EXPECT_LT((r.T_target_source.linear() - expected.linear()).norm(), 1e-9);
+  // And the step did something: the pose moved by millimetres.
+  EXPECT_GT((r.T_target_source.translation() - start.translation()).norm(), 1e-3);
 }
 
 TEST(Icp, FitnessAtAPoseIsTheShareWithinReach) {

@@ -82,7 +82,12 @@ class NearestGrid {
   bool cell_of(const Eigen::Vector3f& query, std::uint32_t& x, std::uint32_t& y, std::uint32_t& z) const {
     if (!cells_) return false;
     const Eigen::Vector3f c = (query - origin_) * inv_cell_;
-    if (!(c.x() >= 0 && c.y() >= 0 && c.z() >= 0)) return false;  // NaN fails too
+    // Compared as floats before the cast: a point far outside (or infinite) would overflow it.
+    // NaN fails too.
+    if (!(c.x() >= 0 && c.y() >= 0 && c.z() >= 0 && c.x() < static_cast<float>(nx_) && c.y() < static_cast<float>(ny_) &&
+          c.z() < static_cast<float>(nz_))) {
+      return false;
+    }
     x = static_cast<std::uint32_t>(c.x()), y = static_cast<std::uint32_t>(c.y()), z = static_cast<std::uint32_t>(c.z());
     return x < nx_ && y < ny_ && z < nz_;
   }
