@@ -40,9 +40,11 @@ struct Sampled {
   std::vector<Eigen::Vector3f> points_camera;
   std::vector<float> distance_m;
 };
-Sampled sample_around(const IcpTarget& model, const Transform& T_camera_object, std::size_t count) {
-  std::mt19937 random(7);
-  std::uniform_real_distribution<float> xy(-0.1f, 0.1f), z(-0.05f, 0.05f);
+// (Other extents and seeds: points nearer the plate, where most are within a few cells of a tolerance.)
+Sampled sample_around(const IcpTarget& model, const Transform& T_camera_object, std::size_t count, float half_xy_m = 0.1f,
+                      float half_z_m = 0.05f, unsigned seed = 7) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<float> xy(-half_xy_m, half_xy_m), z(-half_z_m, half_z_m);
   Sampled s;
   while (s.points_camera.size() < count) {
     const Eigen::Vector3f p_object(xy(random), xy(random), z(random));
@@ -133,19 +135,7 @@ TEST(PointsOnModel, OnTheModelIsWithinTheToleranceOfTheExactNearestModelPoint) {
   // which a point may still be on the model. Points are sampled near the plate, where most of
   // them are within a tolerance (2-3 mm at 1 m) or a few cells of it.
   const Transform T_camera_object = plate_pose();
-  const auto near_plate = [&](const IcpTarget& model) {
-    Sampled s;
-    std::mt19937 random(11);
-    std::uniform_real_distribution<float> xy(-0.06f, 0.06f), z(-0.012f, 0.012f);
-    while (s.points_camera.size() < 20000) {
-      const Eigen::Vector3f p(xy(random), xy(random), z(random));
-      float d2 = std::numeric_limits<float>::max();
-      for (const Eigen::Vector3f& m : model.points) d2 = std::min(d2, (m - p).squaredNorm());
-      s.points_camera.push_back(in_camera(T_camera_object, p.x(), p.y(), p.z()));
-      s.distance_m.push_back(std::sqrt(d2));
-    }
-    return s;
-  };
+  const auto near_plate = [&](const IcpTarget& model) { return sample_around(model, T_camera_object, 20000, 0.06f, 0.012f, 11); };
   {
     const IcpTarget model = plate(0.01f);
     const Sampled s = near_plate(model);
