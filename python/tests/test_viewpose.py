@@ -83,7 +83,7 @@ def test_the_counters_are_the_jsons(scene):
     png, _ = scene["frames"][0]
     r = rec.recognize(viewpose.read_depth_png(png), K=scene["K"], depth_scale=scene["scale"])
     j = json.loads(r.to_json(with_times=False))
-    counters = ("clusters", "hypotheses", "repeats", "screened", "screened_out", "regions", "split_clusters",
+    counters = ("clusters", "hypotheses", "repeats", "screened", "screened_out", "regions", "parts_unreached", "split_clusters",
                 "joined_regions", "grown_regions", "dropped_as_explained", "dropped_inside_planes")
     for name in counters:
         assert getattr(r, name) == j[name], name

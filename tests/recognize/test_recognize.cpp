@@ -724,6 +724,34 @@ TEST(Recognize, TouchingObjectsAreBothFound) {
   expect_jug_and_can_found(r, f);
 }
 
+TEST(Recognize, PartsTheSearchNeverReachesAreNotDescribed) {
+  // Five cans in a row (no object of the database, which holds the jug), each 3 mm into the next so
+  // that the sensor's points join them: one cluster, in which nothing passes, split into convex
+  // parts, one a can. The parts share one budget, a batch each, largest first: three of them spend
+  // it, and the others are never reached. Those are neither described nor screened.
+  const ViewDatabase& db = jug_db();
+  const JugAndCan scene = jug_and_can_scene();
+  // Every other can set back by 4 cm: side by side in one line their fronts would make one convex
+  // surface, whose creases the camera sees edge-on.
+  const double back = 0.04, step = std::sqrt(4 * 0.033 * 0.033 - back * back) - 0.003;
+  SimImage image;
+  for (int k = -2; k <= 2; ++k) {
+    const Eigen::Vector3d at{k * step, k % 2 == 0 ? 0.0 : back, scene.can_lift};
+    image.objects.push_back({1, scene.jug_pose * make_transform(Eigen::Matrix3d::Identity(), at)});
+  }
+  const SimulatedFrame f = simulate_image(scene.ds, image, SensorModel::kinect_v1(), 5);
+  const Recognition r = Recognizer(db).recognize(frame_from_depth(f.depth, K));
+  EXPECT_TRUE(r.detections.empty());
+  EXPECT_GE(r.split_clusters, 1u);
+  EXPECT_GE(r.parts_unreached, 1u);
+  RecognizerOptions every;
+  every.match.max_hypotheses = 0;  // every starting pose of every part tried: each part described
+  const Recognition all = Recognizer(db, every).recognize(frame_from_depth(f.depth, K));
+  EXPECT_TRUE(all.detections.empty());
+  EXPECT_EQ(all.parts_unreached, 0u);
+  EXPECT_EQ(r.regions + r.parts_unreached, all.regions);
+}
+
 TEST(Recognize, AnObjectTallerThanARiserBesideItIsNotTakenToStandInsideTheRiser) {
   // The jug on the table beside a box 0.5 m square and a third of its height (a riser: its top is
   // a plane the segmentation removes). The jug's lower part lies below the riser's plane, and the

@@ -369,6 +369,9 @@ struct Recognition {
   std::size_t screened_out = 0;
   std::size_t split_clusters = 0;  ///< clusters in which nothing passed, tried again in convex parts
   std::size_t regions = 0;  ///< clusters, parts and remainders described and matched against the database
+  /// Convex parts of split clusters that the search never reached (a pose found, or the budget
+  /// spent, before their turn): neither described nor screened, and not counted in `regions`.
+  std::size_t parts_unreached = 0;
   /// Detections dropped because another, more confident one explains the same pixels.
   std::size_t dropped_as_explained = 0;
   /// Poses that passed verification and the confidence bound but lay inside a removed plane
@@ -453,11 +456,20 @@ class Recognizer {
     // By object, the refined poses verification refused so far (try_candidates skips their
     // repeats). A region's batches are tried one after another, on the calling thread.
     mutable std::vector<std::vector<Transform>> refused;
+    // A split cluster's part not described yet (pending_region): its points and the bounds it is
+    // verified with. search describes it when its turn comes (describe_pending).
+    std::optional<PointCloud> pending;
   };
   // The region described and matched, its starting poses ranked; nullopt when it has too few points
   // with normals.
   std::optional<Region> describe_region(const PointCloud& points, const FrameAndPlanes& frame, const VerifyOptions& verify,
                                         Recognition& out) const;
+  // A region of these points, to be described by search when it reaches it (a split cluster's part:
+  // with four parts or more the budget seldom reaches the smallest).
+  static Region pending_region(PointCloud points, const VerifyOptions& verify);
+  // Describes a pending region in place (describe_region); one with too few points with normals is
+  // left with no starting poses.
+  void describe_pending(Region& region, const FrameAndPlanes& frame, Recognition& out) const;
   // The regions' starting poses tried best first across them (screened by a short ICP, else by
   // coarse fit), within one budget (the convex parts of a cluster share it); the first accepted (or
   // the best), challenged and turned.
