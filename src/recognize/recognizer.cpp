@@ -1033,8 +1033,9 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
   const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
   // The short ICP's screen (prescreen): a region alone is screened only once its first batch, in
   // coarse fit order, has failed (most recognized regions pass in it); the parts of a split
-  // cluster (when there are two or more), ranked against each other, all at once by one measure. The exhaustive search
-  // (and keep_best) tries every pose anyway: no order to choose.
+  // cluster (when there are two or more) from their first pose, to be ranked against each other by
+  // one measure (each part when the search reaches it, below). The exhaustive search (and
+  // keep_best) tries every pose anyway: no order to choose.
   const bool screen = !every && options_.match.prescreen > 0;
   std::vector<std::size_t> next(regions.size(), 0), end(regions.size());
   std::optional<Detection> best;
@@ -1084,7 +1085,10 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
     // first, but the parts the budget never reaches (the smallest of four or more, below) cost
     // nothing. Measured on the real YCB-V dev frames (7 objects): 131 regions described instead of
     // 193, 5,793 poses screened instead of 8,268, the frame's median 71 -> 60 ms, the same
-    // detections byte for byte.
+    // detections byte for byte. (One difference: a part whose description fails, fewer than three
+    // points with normals, still counts among the parts, where described first it was dropped; with
+    // one good part left, that part is then searched as a part, not as a lone region. Parts hold at
+    // least ConvexSegmentOptions::min_points, 100: no such part was seen.)
     const auto screen_part = [&](std::size_t r) {
       if (out_of_time(out)) return;
       if (regions[r].pending || votes_due[r]) {

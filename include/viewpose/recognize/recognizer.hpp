@@ -369,8 +369,9 @@ struct Recognition {
   std::size_t screened_out = 0;
   std::size_t split_clusters = 0;  ///< clusters in which nothing passed, tried again in convex parts
   std::size_t regions = 0;  ///< clusters, parts and remainders described and matched against the database
-  /// Convex parts of split clusters that the search never reached (a pose found, or the budget
-  /// spent, before their turn): neither described nor screened, and not counted in `regions`.
+  /// Convex parts of split clusters that the search never reached (a pose found, the budget spent or
+  /// the deadline passed before their turn): neither described nor screened, and not counted in
+  /// `regions`.
   std::size_t parts_unreached = 0;
   /// Detections dropped because another, more confident one explains the same pixels.
   std::size_t dropped_as_explained = 0;
