@@ -1089,7 +1089,7 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
     // points with normals, still counts among the parts, where described first it was dropped; with
     // one good part left, that part is then searched as a part, not as a lone region. Parts hold at
     // least ConvexSegmentOptions::min_points, 100: no such part was seen.)
-    const auto screen_part = [&](std::size_t r) {
+    const auto reach_part = [&](std::size_t r) {
       if (out_of_time(out)) return;
       if (regions[r].pending || votes_due[r]) {
         describe_pending(regions[r], frame, out);
@@ -1109,12 +1109,12 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
     // 2 of 8 frames, a batch each in 6.
     if (regions.size() > 1 && !every) {
       for (std::size_t r = 0; r < regions.size() && spent < budget && !best && !out_of_time(out); ++r) {
-        screen_part(r);
+        reach_part(r);
         try_batch(r, spent);
       }
     }
     if (spent < budget && !best) {
-      for (std::size_t r = 0; r < regions.size(); ++r) screen_part(r);
+      for (std::size_t r = 0; r < regions.size(); ++r) reach_part(r);
     }
     while (spent < budget && !(best && !options_.accept.keep_best)) {
       if (out_of_time(out)) break;
