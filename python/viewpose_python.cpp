@@ -182,6 +182,8 @@ PYBIND11_MODULE(viewpose, m) {
                     "Detections dropped because a more confident one explains the same pixels")
       .def_readonly("dropped_inside_planes", &Recognition::dropped_inside_planes,
                     "Poses refused, or detections dropped, because their model would lie inside a removed plane (a table)")
+      .def_readonly("lifted_out_of_planes", &Recognition::lifted_out_of_planes,
+                    "Poses sunk a little into a removed plane, lifted onto it and kept there (they passed again)")
       .def_property_readonly("times_ms",
                              [](const Recognition& r) {
                                const StageTimes& t = r.times;

@@ -313,6 +313,33 @@ bool Recognizer::inside_planes(std::uint32_t object, const Transform& T_camera_o
          options_.accept.max_share_inside_planes;
 }
 
+void Recognizer::lift_out_of_planes(std::uint32_t object, Refined& h, std::span<const Eigen::Vector3f> cluster,
+                                    const FrameAndPlanes& frame, const VerifyOptions& verify, Recognition& record) const {
+  if (!options_.accept.lift_out_of_planes || frame.planes.empty()) return;
+  // Sunk by more than the sensor's noise at its depth, as many of its points as inside_planes
+  // counts; deeper than inside_planes' margin it was refused already.
+  const float noise_m = depth_tolerance(static_cast<float>(h.T_camera_object.translation().z()), options_.verify);
+  const float margin_m = options_.segment.planes.distance_threshold_m + noise_m;
+  const PlaneSink sink = sink_into_planes(frame.planes, frame.depth, frame.K, prepared(object).plane_test_points, h.T_camera_object,
+                                          margin_m, options_.accept.max_share_inside_planes);
+  if (sink.plane < 0 || !(sink.depth_m > noise_m)) return;
+  const Eigen::Vector3d up = frame.planes[static_cast<std::size_t>(sink.plane)].coefficients.head<3>().cast<double>();
+  Transform lifted = h.T_camera_object;
+  lifted.translation() += static_cast<double>(sink.depth_m) * up;
+  const Verification v = verify_pose(verify_model(object), lifted, frame.depth, frame.K, cluster, verify);
+  const double confidence = v.accepted ? pose_confidence(v) : 0.0;
+  if (v.accepted && confidence >= options_.accept.min_confidence) {
+    h.T_camera_object = lifted;
+    h.v = v;
+    h.confidence = confidence;
+    ++record.lifted_out_of_planes;
+  } else {
+    h.accepted = false;
+    h.sunk = true;
+    ++record.dropped_inside_planes;
+  }
+}
+
 void Recognizer::drop_inside_planes(const FrameAndPlanes& frame, Recognition& out) const {
   const auto t = Clock::now();
   const std::size_t before = out.detections.size();
@@ -352,6 +379,7 @@ void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   out.parts_unreached += part.parts_unreached;
   out.dropped_as_explained += part.dropped_as_explained;
   out.dropped_inside_planes += part.dropped_inside_planes;
+  out.lifted_out_of_planes += part.lifted_out_of_planes;
   out.joined_regions += part.joined_regions;
   out.grown_regions += part.grown_regions;
   out.cut_short = out.cut_short || part.cut_short;
@@ -706,6 +734,8 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const H
       h.accepted = false;
       ++record.dropped_inside_planes;
     }
+    // Nor a little way into it: lifted onto it, the pose must pass again.
+    if (h.accepted) lift_out_of_planes(hypotheses[k].object, h, cluster, frame, verify, record);
   }
   // The wall time, shared between the two stages as their summed times are.
   const double wall = ms_since(start);
@@ -955,13 +985,23 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
       }
       continue;
     }
-    if (!h.accepted) continue;  // passed verification, but not confidently enough
+    if (!h.accepted) {
+      // Passed verification, but not confidently enough, or sunk into a table and refused when
+      // lifted onto it. The latter may be the object turned: a jug half a turn about its axis seats
+      // deeper on the surface seen, and the turn is right (the simulated seed experiment at 1.25 m).
+      if (h.sunk && region.try_near_misses && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
+        nearest_miss = &h;
+        nearest_miss_at = k;
+      }
+      continue;
+    }
     if (found && found->verification.score >= h.v.score) continue;
     found = detection_from(h, region, c);
     if (!take_best) break;
   }
   if (!found && nearest_miss && !out_of_time(out)) {
-    // Nothing passed, but one pose failed only by seeing through it: try it turned about its axes.
+    // Nothing passed, but one pose failed only by seeing through it, or sank into a table: try it
+    // turned about its axes.
     const Candidate& c = region.candidates[which[nearest_miss_at]];
     const std::vector<Refined> turned = refine_and_verify(half_turns(nearest_miss->T_camera_object, c.object),
                                                           region.icp_source, d.cloud.points, frame, region.verify, out);

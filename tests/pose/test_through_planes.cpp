@@ -101,5 +101,29 @@ TEST(ThroughPlanes, NoPlanesNoPatchNoPointsOrAnotherImageSizeGiveZero) {
   EXPECT_NEAR(share_inside_planes(two, table, kinect(), rod(), at(0, 0.9), 0.01f), 90.0 / 201.0, 1.0 / 201.0);
 }
 
+TEST(ThroughPlanes, HowDeepAModelSinksIsTheDepthItsShareOfPointsReaches) {
+  const DepthImage table = plane_seen(0, 640);
+  const std::vector<Plane> planes = planes_in(table);
+  ASSERT_EQ(planes.size(), 1u);
+  const auto sink = [&](double z, double share) { return sink_into_planes(planes, table, kinect(), rod(), at(0, z), 0.01f, share); };
+  // The rod from 0.815 to 1.015 m: 15 mm into the plane at 1 m, its last 16 points past it.
+  PlaneSink s = sink(0.815, 1.0 / 201.0);
+  EXPECT_EQ(s.plane, 0);
+  EXPECT_NEAR(s.depth_m, 0.015f, 1e-4f);
+  // The depth that 5 of its points reach: 4 mm less.
+  EXPECT_NEAR(sink(0.815, 5.0 / 201.0).depth_m, 0.011f, 1e-4f);
+  // More points than have sunk: none reach any depth.
+  EXPECT_EQ(sink(0.815, 20.0 / 201.0).plane, -1);
+  EXPECT_EQ(sink(0.815, 20.0 / 201.0).depth_m, 0.0f);
+  // Resting on it, or wholly behind it (under a board seen past its edge): nothing sinks.
+  EXPECT_EQ(sink(0.8, 1.0 / 201.0).plane, -1);
+  EXPECT_EQ(sink(1.05, 1.0 / 201.0).plane, -1);
+  // A share of 0 asks for nothing.
+  EXPECT_EQ(sink(0.815, 0.0).plane, -1);
+  // Where the plane was not seen, it does not count (past a table's edge).
+  const DepthImage half = plane_seen(0, 320);
+  EXPECT_EQ(sink_into_planes(planes_in(half), half, kinect(), rod(), at(0.1, 0.815), 0.01f, 1.0 / 201.0).plane, -1);
+}
+
 }  // namespace
 }  // namespace viewpose

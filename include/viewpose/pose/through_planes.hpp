@@ -31,4 +31,22 @@ namespace viewpose {
 double share_inside_planes(std::span<const Plane> planes, const DepthImage& depth, const CameraIntrinsics& K,
                            std::span<const Eigen::Vector3f> model_points, const Transform& T_camera_object, float margin_m);
 
+/// How deep a pose's model reaches behind the removed plane it stands on.
+struct PlaneSink {
+  int plane = -1;     ///< index into the planes; -1: the model reaches behind none
+  float depth_m = 0;  ///< how far behind that plane `share` of the model points lie (at least)
+};
+
+/// The plane `model_points` (object frame), posed at `T_camera_object`, sink deepest into, and how
+/// deep: the depth behind the plane that a `share` of the points reach or pass (0 where fewer do).
+/// The points counted are those of share_inside_planes, with `margin_m` as there: behind the plane
+/// where the camera saw it straight above them (the depth measured there within `margin_m` of it),
+/// and only planes the model also lies in front of by more than `margin_m` (it stands on them). A
+/// pose sunk into a table by a few millimetres is the table's band removed with the object's foot;
+/// one sunk by a centimetre or more is another object's height (a can 13 cm tall taken for one of
+/// 14, its top on the top), which lifted out of the table no longer fits.
+PlaneSink sink_into_planes(std::span<const Plane> planes, const DepthImage& depth, const CameraIntrinsics& K,
+                           std::span<const Eigen::Vector3f> model_points, const Transform& T_camera_object, float margin_m,
+                           double share);
+
 }  // namespace viewpose
