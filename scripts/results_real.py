@@ -9,6 +9,8 @@ is not the world. Every run here drives only the `viewpose` command, as a user w
   every detection is a false positive.
 - pcl_kinect: PCL's Kinect scenes: the milk carton found from one scanned view of it, and the
   other scenes against the HOPE database as negatives.
+- the same negatives against every YCB-V object whose mesh ../shared holds (ten): household
+  objects of the same kinds and sizes as those on the mOSD and PCL tables, none of them there.
 """
 import json
 import math
@@ -20,6 +22,8 @@ from pathlib import Path
 YCB_SAMPLE_NAMES = {8: "009_gelatin_box", 14: "025_mug", 21: "061_foam_brick"}
 # HOPE grocery objects (2021): none of them is in the mOSD (2012) or the PCL (2012) scenes.
 HOPE_NEGATIVES = [1, 2, 6, 11, 13, 14, 16, 17]
+# Every YCB-V model in ../shared: ycbv_real_dev's seven and ycbv_real_sample's BOP meshes.
+YCBV_NEGATIVE_SOURCES = [("ycbv_real_dev/models", [1, 3, 8, 9, 11, 14, 21]), ("ycbv_real_sample/models_bop_ycbv", [2, 5, 12])]
 PCL_NEGATIVE_SCENES = ["office1.pcd", "table_scene_mug_stereo_textured.pcd", "grabber_sequences/pcd/frame_20121214T142255.814212.pcd",
                        "grabber_sequences/pcd/frame_20121214T142256.068683.pcd",
                        "grabber_sequences/pcd/frame_20121214T142256.332395.pcd"]
@@ -143,17 +147,47 @@ def hope_database(run, shared, work):
     return db
 
 
-def negatives(run, shared, work):
-    """mOSD and PCL Kinect frames against the HOPE objects: every detection is a false positive."""
+def ycbv_database(run, shared, work):
+    """The YCB-V objects of YCBV_NEGATIVE_SOURCES in one database; None where a source is missing."""
+    dst = work / "ycbv_negatives_models"
+    if dst.exists():
+        shutil.rmtree(dst)
+    dst.mkdir(parents=True)
+    info = {}
+    for folder, ids in YCBV_NEGATIVE_SOURCES:
+        src = shared / "data" / folder
+        if not (src / "models_info.json").exists():
+            return None
+        known = json.loads((src / "models_info.json").read_text())
+        for i in ids:
+            ply = src / f"obj_{i:06d}.ply"
+            if not ply.exists() or str(i) not in known:
+                return None
+            (dst / ply.name).symlink_to(ply)
+            info[str(i)] = known[str(i)]
+    (dst / "models_info.json").write_text(json.dumps(info))
+    db = work / "ycbv_negatives.vpdb"
+    run("db", "build", "--bop-models", dst, "--unit", "mm", "-o", db)
+    return db
+
+
+def negatives(run, shared, work, database="hope"):
+    """mOSD and PCL Kinect frames against objects none of which is in them (the HOPE ones, or YCB-V's):
+    every detection is a false positive."""
     mosd = sorted((shared / "data" / "pcl_mosd" / "test").glob("*.pcd"), key=lambda p: int(p.stem[4:]))
     kinect = shared / "data" / "pcl_kinect"
     if not mosd and not kinect.is_dir():
         return None
-    db = hope_database(run, shared, work)
-    out = {"objects": len(HOPE_NEGATIVES)}
-    out["mosd"] = recognize_each(run, db, mosd, work, "mosd") if mosd else []
+    if database == "hope":
+        db, objects = hope_database(run, shared, work), len(HOPE_NEGATIVES)
+    else:
+        db, objects = ycbv_database(run, shared, work), sum(len(ids) for _, ids in YCBV_NEGATIVE_SOURCES)
+        if db is None:
+            return None
+    out = {"database": database, "objects": objects}
+    out["mosd"] = recognize_each(run, db, mosd, work, f"mosd_{database}") if mosd else []
     pcl = [kinect / s for s in PCL_NEGATIVE_SCENES if (kinect / s).exists()]
-    out["pcl"] = recognize_each(run, db, pcl, work, "pcl_negative") if pcl else []
+    out["pcl"] = recognize_each(run, db, pcl, work, f"pcl_negative_{database}") if pcl else []
     return out
 
 
@@ -172,7 +206,8 @@ def milk(run, shared, work):
 
 def run_all(run, shared, work):
     return {"dev": ycbv_dev(run, shared, work), "sample": ycbv_sample(run, shared, work),
-            "negatives": negatives(run, shared, work), "milk": milk(run, shared, work)}
+            "negatives": negatives(run, shared, work), "negatives_ycbv": negatives(run, shared, work, "ycbv"),
+            "milk": milk(run, shared, work)}
 
 
 # ---- the page ------------------------------------------------------------------------------------
@@ -236,6 +271,9 @@ def headline(real):
     if n and n["mosd"]:
         h["mosd_detections"] = sum(len(f["detections"]) for f in n["mosd"])
         h["mosd_max_s"] = max(f["time_ms"] for f in n["mosd"]) / 1000
+    n = real.get("negatives_ycbv")
+    if n and n["mosd"]:
+        h["negatives_ycbv_detections"] = sum(len(f["detections"]) for f in n["mosd"] + n["pcl"])
     return h
 
 
@@ -337,11 +375,21 @@ def write_real(w, real):
     w("## Real frames with nothing known in them: mOSD and PCL Kinect scenes\n")
     if not n:
         w("Skipped: ../shared/data/pcl_mosd and pcl_kinect are not there.\n")
-    else:
-        w(f"The database holds {n['objects']} HOPE grocery objects (a soup can, five bottles, a box, two cartons; ids "
-          f"{', '.join(map(str, HOPE_NEGATIVES))}), none of which is in these frames: every detection is a false positive.")
-        w("mOSD: ten real Kinect frames of boxes, cylinders and mixed piles on a table (PCL's mOSD test scenes); then the")
-        w("other PCL Kinect scenes. A robot looking around sees such frames far more often than frames with its objects.\n")
+    for n in (real.get("negatives"), real.get("negatives_ycbv")):
+        if not n:
+            continue
+        if n["database"] == "hope":
+            w(f"The database holds {n['objects']} HOPE grocery objects (a soup can, five bottles, a box, two cartons; ids "
+              f"{', '.join(map(str, HOPE_NEGATIVES))}), none of which is in these frames: every detection is a false positive.")
+            w("mOSD: ten real Kinect frames of boxes, cylinders and mixed piles on a table (PCL's mOSD test scenes); then the")
+            w("other PCL Kinect scenes. A robot looking around sees such frames far more often than frames with its objects.\n")
+        else:
+            ids = ", ".join(str(i) for _, group in YCBV_NEGATIVE_SOURCES for i in group)
+            w(f"### The same frames against {n['objects']} YCB-V objects\n")
+            w(f"Every YCB-V object whose mesh ../shared holds (ids {ids}: cans, boxes, a pitcher, a mug, a bottle, a brick),")
+            w("household things of the same kinds and sizes as those on these tables, none of them there. A detection here is")
+            w("a false positive too, though it may be a look-alike that depth alone cannot tell apart (a box of nearly the same")
+            w("size).\n")
         w("| frame | clusters | poses tried | detections (all false) | frame time | process |")
         w("|---|---|---|---|---|---|")
         for f in n["mosd"] + n["pcl"]:
