@@ -9,7 +9,7 @@ is not the world. Every run here drives only the `viewpose` command, as a user w
   every detection is a false positive.
 - pcl_kinect: PCL's Kinect scenes: the milk carton found from one scanned view of it, and the
   other scenes against the HOPE database as negatives.
-- the same negatives against every YCB-V object whose mesh ../shared holds (ten): household
+- the same negatives against every YCB-V object ../shared holds in BOP's format (ten): household
   objects of the same kinds and sizes as those on the mOSD and PCL tables, none of them there.
 """
 import json
@@ -22,7 +22,8 @@ from pathlib import Path
 YCB_SAMPLE_NAMES = {8: "009_gelatin_box", 14: "025_mug", 21: "061_foam_brick"}
 # HOPE grocery objects (2021): none of them is in the mOSD (2012) or the PCL (2012) scenes.
 HOPE_NEGATIVES = [1, 2, 6, 11, 13, 14, 16, 17]
-# Every YCB-V model in ../shared: ycbv_real_dev's seven and ycbv_real_sample's BOP meshes.
+# Every YCB-V model in ../shared in BOP's format: ycbv_real_dev's seven and ycbv_real_sample's BOP meshes (the
+# re-oriented OBJ meshes of ycb_meshes/, the soup can and the drill among them, are in another frame and unit).
 YCBV_NEGATIVE_SOURCES = [("ycbv_real_dev/models", [1, 3, 8, 9, 11, 14, 21]), ("ycbv_real_sample/models_bop_ycbv", [2, 5, 12])]
 PCL_NEGATIVE_SCENES = ["office1.pcd", "table_scene_mug_stereo_textured.pcd", "grabber_sequences/pcd/frame_20121214T142255.814212.pcd",
                        "grabber_sequences/pcd/frame_20121214T142256.068683.pcd",
@@ -386,7 +387,7 @@ def write_real(w, real):
         else:
             ids = ", ".join(str(i) for _, group in YCBV_NEGATIVE_SOURCES for i in group)
             w(f"### The same frames against {n['objects']} YCB-V objects\n")
-            w(f"Every YCB-V object whose mesh ../shared holds (ids {ids}: cans, boxes, a pitcher, a mug, a bottle, a brick),")
+            w(f"Every YCB-V object ../shared holds in BOP's format (ids {ids}: cans, boxes, a pitcher, a mug, two bottles, a brick),")
             w("household things of the same kinds and sizes as those on these tables, none of them there. A detection here is")
             w("a false positive too, though it may be a look-alike that depth alone cannot tell apart (a box of nearly the same")
             w("size).\n")

@@ -317,7 +317,7 @@ void Recognizer::lift_out_of_planes(std::uint32_t object, Refined& h, std::span<
                                     const FrameAndPlanes& frame, const VerifyOptions& verify, Recognition& record) const {
   if (!options_.accept.lift_out_of_planes || frame.planes.empty()) return;
   // Sunk by more than the sensor's noise at its depth, as many of its points as inside_planes
-  // counts; deeper than inside_planes' margin it was refused already.
+  // counts (deeper than inside_planes' margin, more of them than that, it was refused already).
   const float noise_m = depth_tolerance(static_cast<float>(h.T_camera_object.translation().z()), options_.verify);
   const float margin_m = options_.segment.planes.distance_threshold_m + noise_m;
   const PlaneSink sink = sink_into_planes(frame.planes, frame.depth, frame.K, prepared(object).plane_test_points, h.T_camera_object,

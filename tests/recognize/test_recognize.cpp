@@ -178,6 +178,7 @@ void expect_same_recognition(const Recognition& a, const Recognition& b) {
   EXPECT_EQ(a.split_clusters, b.split_clusters);
   EXPECT_EQ(a.dropped_as_explained, b.dropped_as_explained);
   EXPECT_EQ(a.dropped_inside_planes, b.dropped_inside_planes);
+  EXPECT_EQ(a.lifted_out_of_planes, b.lifted_out_of_planes);
   EXPECT_EQ(a.joined_regions, b.joined_regions);
   EXPECT_EQ(a.grown_regions, b.grown_regions);
   ASSERT_EQ(a.detections.size(), b.detections.size());

@@ -178,7 +178,12 @@ struct AcceptOptions {
   /// the table; the plane's band removes its foot with the table, so a right pose may sink a few
   /// millimetres and is the better for lifting, while another object's height (a master chef can,
   /// 14 cm, fitted by its top to a real 13 cm can in mOSD, its foot 17 mm into the table) no longer
-  /// fits once it stands where it would have to.
+  /// fits once it stands where it would have to. A pose refused so has its half turns tried (as a
+  /// near miss, where AcceptOptions::try_half_turns allows them): the seed experiment's jug at
+  /// 1.25 m first passed flipped, 16 mm in the table, and its turn is right. The search's poses
+  /// only: one verified jointly with another is judged by max_share_inside_planes alone. A lifted
+  /// detection keeps the ICP fitness and residual of the pose ICP gave, and on_verified hears that
+  /// pose. With max_share_inside_planes 1, nothing is lifted either.
   bool lift_out_of_planes = true;
   /// Called in order, on the calling thread, for every hypothesis that passed verification's bounds,
   /// before the confidence threshold: what the confidence model is fit on (viewpose bop --hypotheses).
@@ -577,7 +582,8 @@ class Recognizer {
   // Each hypothesis refined and verified, in parallel when allowed; the results in the order given,
   // so that what is made of them does not depend on the threads. Those ICP brings onto a pose in
   // `refused` (by object; may be null) are not verified. A pose that passes but lies inside a plane
-  // is not accepted, and counted in `out` (Recognition::dropped_inside_planes), as are the times.
+  // is not accepted, and counted in `out` (Recognition::dropped_inside_planes), as are the times;
+  // one sunk a little into a plane is lifted onto it and verified again (lift_out_of_planes).
   std::vector<Refined> refine_and_verify(std::span<const Hypothesis> hypotheses, std::span<const Eigen::Vector3f> icp_source,
                                          std::span<const Eigen::Vector3f> cluster, const FrameAndPlanes& frame,
                                          const VerifyOptions& verify, Recognition& out,
