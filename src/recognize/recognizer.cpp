@@ -430,32 +430,72 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   const PoseSource source = options_.match.source;
   const bool votes = source == PoseSource::both || (source == PoseSource::touching && depth > 0);
   std::optional<Detection> partial;  // a pose that explains part of the region well (joint_min_cluster_explained)
+  // A cluster whose first batch of poses fails goes on in one budget with its convex parts, if it
+  // has any (SplitOptions::whole_with_parts): `whole` keeps its untried poses for that.
+  const bool every = options_.accept.keep_best || options_.match.max_hypotheses == 0;
+  // (A budget of one batch or less is the whole region's alone, then its parts', as without it.)
+  const std::size_t first_batch = std::max<std::size_t>(1, options_.run.batch);
+  const bool whole_with_parts = options_.split.whole_with_parts && depth == 0 && !votes && !every && options_.match.max_hypotheses > first_batch;
+  std::optional<Region> whole;
   if (size <= options_.match.max_region_size_factor * largest_diameter_m_) {
-    if (std::optional<Detection> det = recognize_cluster(points, frame, depth > 0 ? part_verify : options_.verify, out, &partial, votes)) {
+    const VerifyOptions& verify = depth > 0 ? part_verify : options_.verify;
+    std::optional<Detection> det;
+    if (whole_with_parts) {
+      std::vector<Region> alone;
+      if (std::optional<Region> region = describe_region(points, frame, verify, out)) alone.push_back(std::move(*region));
+      det = search(alone, frame, out, &partial, votes, nullptr, first_batch);
+      if (!det && !alone.empty() && alone[0].candidates.size() > first_batch) {
+        whole = std::move(alone[0]);
+        whole->candidates.erase(whole->candidates.begin(), whole->candidates.begin() + static_cast<std::ptrdiff_t>(first_batch));
+      }
+    } else {
+      det = recognize_cluster(points, frame, verify, out, &partial, votes);
+    }
+    if (det) {
       det->from_split_cluster = depth > 0;
       recognize_rest(points, std::move(*det), frame, out, depth);
       return;
     }
   }
+  // The rest of the whole region's poses, alone, where it has no parts to share them with.
+  const auto search_whole_alone = [&]() {
+    if (!whole || out_of_time(out)) return false;
+    std::vector<Region> alone;
+    alone.push_back(std::move(*whole));
+    whole.reset();
+    // As the search alone would have gone on: the rest screened, within what is left of its budget.
+    if (options_.match.prescreen > 0) prescreen(alone[0], 0, out);
+    std::optional<Detection> rest_partial;
+    std::optional<Detection> det = search(alone, frame, out, &rest_partial, votes, nullptr, options_.match.max_hypotheses - first_batch);
+    if (!partial || (rest_partial && rest_partial->verification.score > partial->verification.score)) partial = std::move(rest_partial);
+    if (!det) return false;
+    recognize_rest(points, std::move(*det), frame, out, depth);
+    return true;
+  };
   // Nothing passed: the region may be objects touching each other. Try its convex parts, largest
   // first (a pile of a few objects: SplitOptions::max_size_factor, min_size_m).
   if (!options_.split.enabled || depth >= options_.split.max_depth ||
       size > std::max(options_.split.min_size_m, options_.split.max_size_factor * largest_diameter_m_) || out_of_time(out)) {
+    if (search_whole_alone()) return;
     if (partial && options_.split.enabled && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
     return;
   }
   auto t = Clock::now();
   const std::vector<Cluster> parts = convex_segments(points, options_.split.parts);
   out.times.split_ms += ms_since(t);
-  // One part that is nearly the whole region has been tried already.
+  // One part that is nearly the whole region: the whole region's search goes on, alone.
   if (parts.empty() || (parts.size() == 1 && parts[0].size() > 0.9 * static_cast<double>(points.size()))) {
+    if (search_whole_alone()) return;
     if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
     return;
   }
   ++out.split_clusters;
-  // The parts' starting poses tried together, within one budget; each part described when the
-  // search reaches it.
+  // The parts' starting poses tried together, within one budget (with the whole region's untried
+  // ones, first among the regions); each part described when the search reaches it.
   std::vector<Region> regions;
+  const bool with_whole = whole.has_value();
+  if (whole) regions.push_back(std::move(*whole));
+  whole.reset();
   for (const Cluster& part : parts) {
     PointCloud part_points = cluster_points(points, part);
     if (bounding_box(part_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
@@ -464,6 +504,8 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   std::optional<Detection> part_partial, seed;
   std::optional<Detection> det = search(regions, frame, out, &part_partial, votes, &seed);
   out.parts_unreached += static_cast<std::size_t>(std::count_if(regions.begin(), regions.end(), [](const Region& r) { return r.pending.has_value(); }));
+  // (Found in the whole region: its description holds more points than any part's.)
+  const bool in_whole = det && with_whole && det->cluster_points == regions[0].description.cloud.size();
   if (!det && seed && !out_of_time(out)) {
     // A part's pose that met every part bound but the model's support and was not accepted: much
     // of the model it shows lies outside the part (a mug's outer wall, cut from its inside and
@@ -483,7 +525,7 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
     if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
     return;
   }
-  det->from_split_cluster = true;
+  det->from_split_cluster = !in_whole;
   recognize_rest(points, std::move(*det), frame, out, depth);
 }
 
@@ -1064,12 +1106,13 @@ std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points,
 }
 
 std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const FrameAndPlanes& frame, Recognition& out,
-                                            std::optional<Detection>* partial, bool votes, std::optional<Detection>* seed) const {
+                                            std::optional<Detection>* partial, bool votes, std::optional<Detection>* seed,
+                                            std::size_t max_poses) const {
   // The starting poses of every region, best first across them (by the screen, else coarse fit), a
   // batch at a time from one region, until one passes or the budget is spent (with keep_best: all
   // of them, the best kept). The regions share the budget: the parts of one cluster compete for it.
   const bool every = options_.accept.keep_best || options_.match.max_hypotheses == 0;
-  const std::size_t budget = every ? std::numeric_limits<std::size_t>::max() : options_.match.max_hypotheses;
+  const std::size_t budget = std::min(max_poses, every ? std::numeric_limits<std::size_t>::max() : options_.match.max_hypotheses);
   const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
   // The short ICP's screen (prescreen): a region alone is screened only once its first batch, in
   // coarse fit order, has failed (most recognized regions pass in it); the parts of a split

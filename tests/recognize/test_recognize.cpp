@@ -725,12 +725,9 @@ TEST(Recognize, TouchingObjectsAreBothFound) {
   expect_jug_and_can_found(r, f);
 }
 
-TEST(Recognize, PartsTheSearchNeverReachesAreNotDescribed) {
-  // Five cans in a row (no object of the database, which holds the jug), each 3 mm into the next so
-  // that the sensor's points join them: one cluster, in which nothing passes, split into convex
-  // parts, one a can. The parts share one budget, a batch each, largest first: three of them spend
-  // it, and the others are never reached. Those are neither described nor screened.
-  const ViewDatabase& db = jug_db();
+// Five cans in a row (no object of jug_db), each 3 mm into the next so that the sensor's points join
+// them: one cluster, in which nothing passes, with a convex part for each can.
+SimulatedFrame five_cans_in_a_row() {
   const JugAndCan scene = jug_and_can_scene();
   // Every other can set back by 4 cm: side by side in one line their fronts would make one convex
   // surface, whose creases the camera sees edge-on.
@@ -740,7 +737,14 @@ TEST(Recognize, PartsTheSearchNeverReachesAreNotDescribed) {
     const Eigen::Vector3d at{k * step, k % 2 == 0 ? 0.0 : back, scene.can_lift};
     image.objects.push_back({1, scene.jug_pose * make_transform(Eigen::Matrix3d::Identity(), at)});
   }
-  const SimulatedFrame f = simulate_image(scene.ds, image, SensorModel::kinect_v1(), 5);
+  return simulate_image(scene.ds, image, SensorModel::kinect_v1(), 5);
+}
+
+TEST(Recognize, PartsTheSearchNeverReachesAreNotDescribed) {
+  // The five cans' cluster: its parts share one budget, a batch each, largest first: three of them
+  // spend it, and the others are never reached. Those are neither described nor screened.
+  const ViewDatabase& db = jug_db();
+  const SimulatedFrame f = five_cans_in_a_row();
   const Recognition r = Recognizer(db).recognize(frame_from_depth(f.depth, K));
   EXPECT_TRUE(r.detections.empty());
   EXPECT_GE(r.split_clusters, 1u);
@@ -751,6 +755,31 @@ TEST(Recognize, PartsTheSearchNeverReachesAreNotDescribed) {
   EXPECT_TRUE(all.detections.empty());
   EXPECT_EQ(all.parts_unreached, 0u);
   EXPECT_EQ(r.regions + r.parts_unreached, all.regions);
+}
+
+TEST(Recognize, AClusterWhoseFirstBatchFailsGoesOnWithItsPartsInOneBudget) {
+  // The five cans' cluster, nothing known in it. Searched on alone after its first batch and then
+  // in its parts, it spent two budgets; going on together with its parts, its first batch and one.
+  const ViewDatabase& db = jug_db();
+  const Frame frame = frame_from_depth(five_cans_in_a_row().depth, K);
+  RecognizerOptions together, apart;
+  apart.split.whole_with_parts = false;
+  ASSERT_TRUE(together.split.whole_with_parts) << "the default";
+  const Recognition t = Recognizer(db, together).recognize(frame), a = Recognizer(db, apart).recognize(frame);
+  EXPECT_TRUE(t.detections.empty());
+  EXPECT_TRUE(a.detections.empty());
+  ASSERT_EQ(t.clusters, 1u);
+  EXPECT_EQ(t.split_clusters, 1u);
+  EXPECT_EQ(a.split_clusters, 1u);
+  // The budget spent: poses refined, and poses the screen refused where it led them (each spends
+  // its share unrefined). Each batch may add the three half turns of a pose that nearly passed.
+  const auto spent = [](const Recognition& r) { return r.hypotheses + r.screened_out; };
+  const std::size_t budget = together.match.max_hypotheses, batch = together.run.batch;
+  const std::size_t batches = 1 + (budget + batch - 1) / batch;
+  EXPECT_LE(spent(t), batch + budget + 3 * batches);
+  EXPECT_GE(spent(a), 2 * budget) << "alone, then its parts";
+  EXPECT_LT(spent(t), spent(a));
+  EXPECT_LT(t.screened, a.screened);
 }
 
 TEST(Recognize, AnObjectTallerThanARiserBesideItIsNotTakenToStandInsideTheRiser) {
