@@ -446,7 +446,10 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
       det = search(alone, frame, out, &partial, votes, nullptr, first_batch);
       if (!det && !alone.empty() && alone[0].candidates.size() > first_batch) {
         whole = std::move(alone[0]);
-        whole->candidates.erase(whole->candidates.begin(), whole->candidates.begin() + static_cast<std::ptrdiff_t>(first_batch));
+        whole->tried = first_batch;
+        // (As searched alone: a whole cluster's pose is no seed to grow, whose piece is the cluster.)
+        whole->gives_seed = false;
+        whole->best_seed.reset();
       }
     } else {
       det = recognize_cluster(points, frame, verify, out, &partial, votes);
@@ -464,7 +467,6 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
     alone.push_back(std::move(*whole));
     whole.reset();
     // As the search alone would have gone on: the rest screened, within what is left of its budget.
-    if (options_.match.prescreen > 0) prescreen(alone[0], 0, out);
     std::optional<Detection> rest_partial;
     std::optional<Detection> det = search(alone, frame, out, &rest_partial, votes, nullptr, options_.match.max_hypotheses - first_batch);
     if (!partial || (rest_partial && rest_partial->verification.score > partial->verification.score)) partial = std::move(rest_partial);
@@ -1015,7 +1017,7 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
     // failed the support or passed it narrowly and scored below the confidence bound (a pose
     // refused only for lying inside a plane is no seed: it would be refused again).
     const bool scored_low = h.v.accepted && h.confidence < options_.accept.min_confidence;
-    if ((!h.v.accepted || scored_low) && options_.split.grow_reach_m > 0 && passes(h.v, region.seed) &&
+    if ((!h.v.accepted || scored_low) && region.gives_seed && options_.split.grow_reach_m > 0 && passes(h.v, region.seed) &&
         (!region.best_seed || h.v.score > region.best_seed->verification.score)) {
       region.best_seed = detection_from(h, region, c);
       region.best_seed->cluster_points = region.point_count;  // as grown_region counts points
@@ -1112,7 +1114,8 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
   // batch at a time from one region, until one passes or the budget is spent (with keep_best: all
   // of them, the best kept). The regions share the budget: the parts of one cluster compete for it.
   const bool every = options_.accept.keep_best || options_.match.max_hypotheses == 0;
-  const std::size_t budget = std::min(max_poses, every ? std::numeric_limits<std::size_t>::max() : options_.match.max_hypotheses);
+  const std::size_t budget = every ? std::numeric_limits<std::size_t>::max() : options_.match.max_hypotheses;
+  const std::size_t spend = std::min(max_poses, budget);  // this call's share of it
   const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
   // The short ICP's screen (prescreen): a region alone is screened only once its first batch, in
   // coarse fit order, has failed (most recognized regions pass in it); the parts of a split
@@ -1130,7 +1133,7 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
   // been refined).
   const auto try_batch = [&](std::size_t r, std::size_t& spent) {
     which.clear();
-    for (std::size_t taken = 0; next[r] < end[r] && taken < batch && spent < budget; ++next[r], ++spent, ++taken) {
+    for (std::size_t taken = 0; next[r] < end[r] && taken < batch && spent < spend; ++next[r], ++spent, ++taken) {
       if (!refused_after_screen(regions[r], regions[r].candidates[next[r]], frame, out)) which.push_back(next[r]);
     }
     if (which.empty()) return;
@@ -1155,10 +1158,11 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
       std::stable_sort(region.candidates.begin(), region.candidates.end(), [](const Candidate& x, const Candidate& y) { return x.fit > y.fit; });
       interleave_by_object(region.candidates.begin(), region.candidates.end());
       region.screen_done = false;
+      region.tried = 0;
       out.times.match_ms += ms_since(t);
     };
     for (std::size_t r = 0; r < regions.size(); ++r) {
-      next[r] = 0;
+      next[r] = source == 0 ? regions[r].tried : 0;
       end[r] = regions[r].pending || votes_due[r] ? 0 : std::min(regions[r].candidates.size(), budget);
     }
     // The parts of a split cluster are described (and their votes cast, in the votes' turn), and
@@ -1179,27 +1183,28 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
         if (votes_due[r]) cast_votes(regions[r]), votes_due[r] = false;
         end[r] = std::min(regions[r].candidates.size(), budget);
       }
-      if (screen && regions.size() > 1 && !regions[r].screen_done) prescreen(regions[r], 0, out);
+      if (screen && regions.size() > 1 && !regions[r].screen_done) prescreen(regions[r], next[r], out);
     };
     std::size_t spent = 0;
     // A split cluster's parts each try their first batch (their best screened poses), largest part
     // first, before the order across them takes over: a part of a known object beside an unknown
     // larger one (a mug against a box) screens below the poses of the known object fitted to the
     // larger one's part, and the shared budget was spent before its turn came
-    // (SplitOptions::grow_reach_m then uses its pose). With three parts or more this round spends
-    // the whole budget, and the smallest parts of four or more get none. Measured: giving each part
+    // (SplitOptions::grow_reach_m then uses its pose). With three regions or more (a whole cluster
+    // searched on with its parts is one, first) this round spends the whole budget, and the
+    // smallest of four or more get none. Measured: giving each part
     // fewer (half the budget shared among them) found the mug of YCB-V 0000 alone in the database in
     // 2 of 8 frames, a batch each in 6.
     if (regions.size() > 1 && !every) {
-      for (std::size_t r = 0; r < regions.size() && spent < budget && !best && !out_of_time(out); ++r) {
+      for (std::size_t r = 0; r < regions.size() && spent < spend && !best && !out_of_time(out); ++r) {
         reach_part(r);
         try_batch(r, spent);
       }
     }
-    if (spent < budget && !best) {
+    if (spent < spend && !best) {
       for (std::size_t r = 0; r < regions.size(); ++r) reach_part(r);
     }
-    while (spent < budget && !(best && !options_.accept.keep_best)) {
+    while (spent < spend && !(best && !options_.accept.keep_best)) {
       if (out_of_time(out)) break;
       if (screen && regions.size() == 1 && !regions[0].screen_done && next[0] > 0) prescreen(regions[0], next[0], out);
       // The region whose next starting pose ranks best (the first of equals: parts come largest first).

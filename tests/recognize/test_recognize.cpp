@@ -741,8 +741,9 @@ SimulatedFrame five_cans_in_a_row() {
 }
 
 TEST(Recognize, PartsTheSearchNeverReachesAreNotDescribed) {
-  // The five cans' cluster: its parts share one budget, a batch each, largest first: three of them
-  // spend it, and the others are never reached. Those are neither described nor screened.
+  // The five cans' cluster: after its own first batch it goes on with its parts in one budget, a
+  // batch each, the whole cluster's first and then the parts' largest first: three regions spend
+  // it, and the other parts are never reached. Those are neither described nor screened.
   const ViewDatabase& db = jug_db();
   const SimulatedFrame f = five_cans_in_a_row();
   const Recognition r = Recognizer(db).recognize(frame_from_depth(f.depth, K));

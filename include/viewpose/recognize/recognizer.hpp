@@ -213,8 +213,11 @@ struct SplitOptions {
   /// parts with a budget again. Most clusters that hold one object pass in that first batch; on
   /// real tables the rest are mostly objects touching each other, or nothing known, and their
   /// whole search found little: YCB-V dev (7 objects), 2 of 58 whole clusters, with 466 of the
-  /// 912 poses refined. What a detection leaves of a region is searched as before (whole first;
-  /// its neighbours' votes are cast there). false: every cluster whole first, then its parts.
+  /// 912 poses refined. A cluster whose parts are none, or one that is nearly all of it, goes on
+  /// alone as before. Searched as before too: what a detection leaves of a region (its neighbours'
+  /// votes are cast there), and every region with votes everywhere (PoseSource::both), with
+  /// keep_best, an exhaustive search (max_hypotheses 0) or a budget of one batch or less.
+  /// false: every cluster alone first, with the whole budget, then its parts with another.
   bool whole_with_parts = true;
   /// A convex part is a small patch and weaker evidence than a whole cluster: a pose found in one is
   /// verified with `verify` tightened to these bounds. Measured on the real YCB-Video frames: true
@@ -480,6 +483,10 @@ class Recognizer {
     VerifyOptions seed;  // verify without the model's support bound (SplitOptions::grow_reach_m)
     // The best pose that passed `seed` and was not accepted (its cluster_points: point_count).
     mutable std::optional<Detection> best_seed;
+    bool gives_seed = true;  // false: a whole cluster searched on with its parts (only parts are grown)
+    // Its first `tried` candidates were refined already (a whole cluster's first batch, searched on
+    // alone or with its parts): the search starts after them, within the same range for challengers.
+    std::size_t tried = 0;
     std::size_t point_count = 0;  // the region's points (the description keeps those with normals)
     // By object, the refined poses verification refused so far (try_candidates skips their
     // repeats). A region's batches are tried one after another, on the calling thread.
@@ -504,8 +511,10 @@ class Recognizer {
   // With `partial`: where nothing passes, the best pose that failed only by the share of its region
   // it explains (SplitOptions::joint_min_cluster_explained), if any, for explain_jointly. With
   // `seed`: the best that met every bound but the model's support and was not accepted, to grow
-  // (SplitOptions::grow_reach_m). Two or more regions (a split cluster's parts) each try their
-  // first batch, within the budget, before the order across them.
+  // (SplitOptions::grow_reach_m). Two or more regions (a split cluster's parts, and the whole
+  // cluster's untried poses first: SplitOptions::whole_with_parts) each try their first batch,
+  // within the budget, before the order across them. `max_poses`: at most this many poses spent
+  // in this call (each region's range, which challengers are taken from, stays the budget's).
   std::optional<Detection> search(std::vector<Region>& regions, const FrameAndPlanes& frame, Recognition& out,
                                   std::optional<Detection>* partial = nullptr, bool votes = false,
                                   std::optional<Detection>* seed = nullptr,
