@@ -431,45 +431,39 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   const bool votes = source == PoseSource::both || (source == PoseSource::touching && depth > 0);
   std::optional<Detection> partial;  // a pose that explains part of the region well (joint_min_cluster_explained)
   // A cluster whose first batch of poses fails goes on in one budget with its convex parts, if it
-  // has any (SplitOptions::whole_with_parts): `whole` keeps its untried poses for that.
+  // has any (SplitOptions::whole_with_parts).
   const bool every = options_.accept.keep_best || options_.match.max_hypotheses == 0;
   // (A budget of one batch or less is the whole region's alone, then its parts', as without it.)
   const std::size_t first_batch = std::max<std::size_t>(1, options_.run.batch);
   const bool whole_with_parts = options_.split.whole_with_parts && depth == 0 && !votes && !every && options_.match.max_hypotheses > first_batch;
-  std::optional<Region> whole;
+  // The whole region, described and searched alone (with whole_with_parts, its first batch); where
+  // that fails and poses are left, kept to go on with them (Region::tried), else emptied.
+  std::vector<Region> whole;
   if (size <= options_.match.max_region_size_factor * largest_diameter_m_) {
-    const VerifyOptions& verify = depth > 0 ? part_verify : options_.verify;
-    std::optional<Detection> det;
-    if (whole_with_parts) {
-      std::vector<Region> alone;
-      if (std::optional<Region> region = describe_region(points, frame, verify, out)) alone.push_back(std::move(*region));
-      det = search(alone, frame, out, &partial, votes, nullptr, first_batch);
-      if (!det && !alone.empty() && alone[0].candidates.size() > first_batch) {
-        whole = std::move(alone[0]);
-        whole->tried = first_batch;
-        // (As searched alone: a whole cluster's pose is no seed to grow, whose piece is the cluster.)
-        whole->gives_seed = false;
-        whole->best_seed.reset();
-      }
-    } else {
-      det = recognize_cluster(points, frame, verify, out, &partial, votes);
+    if (std::optional<Region> region = describe_region(points, frame, depth > 0 ? part_verify : options_.verify, out)) {
+      // (Alone or with its parts, a whole cluster's pose is no seed to grow: its piece is the cluster.)
+      region->gives_seed = false;
+      whole.push_back(std::move(*region));
     }
+    std::optional<Detection> det = search(whole, frame, out, &partial, votes, nullptr,
+                                          whole_with_parts ? first_batch : std::numeric_limits<std::size_t>::max());
     if (det) {
       det->from_split_cluster = depth > 0;
       recognize_rest(points, std::move(*det), frame, out, depth);
       return;
     }
+    if (whole_with_parts && !whole.empty() && whole[0].candidates.size() > first_batch) {
+      whole[0].tried = first_batch;
+    } else {
+      whole.clear();
+    }
   }
-  // The rest of the whole region's poses, alone, where it has no parts to share them with.
-  const auto search_whole_alone = [&]() {
-    if (!whole || out_of_time(out)) return false;
-    std::vector<Region> alone;
-    alone.push_back(std::move(*whole));
-    whole.reset();
-    // As the search alone would have gone on: the rest screened, within what is left of its budget.
-    std::optional<Detection> rest_partial;
-    std::optional<Detection> det = search(alone, frame, out, &rest_partial, votes, nullptr, options_.match.max_hypotheses - first_batch);
-    if (!partial || (rest_partial && rest_partial->verification.score > partial->verification.score)) partial = std::move(rest_partial);
+  // The rest of the whole region's poses, alone, where it has no parts to share them with: as its
+  // search alone would have gone on, screened, within what is left of its budget.
+  const auto search_on_alone = [&]() {
+    if (whole.empty() || out_of_time(out)) return false;
+    std::optional<Detection> det = search(whole, frame, out, &partial, votes, nullptr, options_.match.max_hypotheses - first_batch);
+    whole.clear();
     if (!det) return false;
     recognize_rest(points, std::move(*det), frame, out, depth);
     return true;
@@ -478,7 +472,7 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   // first (a pile of a few objects: SplitOptions::max_size_factor, min_size_m).
   if (!options_.split.enabled || depth >= options_.split.max_depth ||
       size > std::max(options_.split.min_size_m, options_.split.max_size_factor * largest_diameter_m_) || out_of_time(out)) {
-    if (search_whole_alone()) return;
+    if (search_on_alone()) return;
     if (partial && options_.split.enabled && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
     return;
   }
@@ -487,27 +481,24 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   out.times.split_ms += ms_since(t);
   // One part that is nearly the whole region: the whole region's search goes on, alone.
   if (parts.empty() || (parts.size() == 1 && parts[0].size() > 0.9 * static_cast<double>(points.size()))) {
-    if (search_whole_alone()) return;
+    if (search_on_alone()) return;
     if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
     return;
   }
   ++out.split_clusters;
   // The parts' starting poses tried together, within one budget (with the whole region's untried
   // ones, first among the regions); each part described when the search reaches it.
-  std::vector<Region> regions;
-  const bool with_whole = whole.has_value();
-  if (whole) regions.push_back(std::move(*whole));
-  whole.reset();
+  std::vector<Region> regions = std::move(whole);
+  const bool with_whole = !regions.empty();
   for (const Cluster& part : parts) {
     PointCloud part_points = cluster_points(points, part);
     if (bounding_box(part_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
     regions.push_back(pending_region(std::move(part_points), part_verify));
   }
-  std::optional<Detection> part_partial, seed;
-  std::optional<Detection> det = search(regions, frame, out, &part_partial, votes, &seed);
+  std::optional<Detection> seed;
+  std::size_t found_in = 0;
+  std::optional<Detection> det = search(regions, frame, out, &partial, votes, &seed, std::numeric_limits<std::size_t>::max(), &found_in);
   out.parts_unreached += static_cast<std::size_t>(std::count_if(regions.begin(), regions.end(), [](const Region& r) { return r.pending.has_value(); }));
-  // (Found in the whole region: its description holds more points than any part's.)
-  const bool in_whole = det && with_whole && det->cluster_points == regions[0].description.cloud.size();
   if (!det && seed && !out_of_time(out)) {
     // A part's pose that met every part bound but the model's support and was not accepted: much
     // of the model it shows lies outside the part (a mug's outer wall, cut from its inside and
@@ -517,17 +508,16 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
     const PointCloud grown = grown_region(points, *seed);
     if (grown.size() > seed->cluster_points && grown.size() < points.size()) {
       ++out.grown_regions;
-      det = recognize_cluster(grown, frame, part_verify, out, nullptr, votes);
+      det = recognize_cluster(grown, frame, part_verify, out, votes);
     }
   }
   if (!det) {
     // No part passed alone: a pose that explains part of the region (or of a part) well, and
     // whatever the rest of the region is.
-    if (!partial || (part_partial && part_partial->verification.score > partial->verification.score)) partial = std::move(part_partial);
     if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
     return;
   }
-  det->from_split_cluster = !in_whole;
+  det->from_split_cluster = !(with_whole && found_in == 0);  // (not found in the whole region)
   recognize_rest(points, std::move(*det), frame, out, depth);
 }
 
@@ -640,7 +630,7 @@ void Recognizer::join_fragments(const Segmentation& seg, const FrameAndPlanes& f
     joined.width = static_cast<int>(joined.points.size());
     ++out.joined_regions;
     // (The views' poses alone: SplitOptions::join_gap_m says why.)
-    std::optional<Detection> det = recognize_cluster(joined, frame, part_verify, out, nullptr, false);
+    std::optional<Detection> det = recognize_cluster(joined, frame, part_verify, out);
     if (!det) continue;
     det->from_split_cluster = true;
     out.detections.push_back(std::move(*det));
@@ -661,7 +651,7 @@ void Recognizer::explain_jointly(const PointCloud& points, const Detection& part
     // detection left): a kept pose is not yet a detection, and with `touching` votes cast in the
     // rest of every such pose in a whole cluster were most of a frame of unknown things' time (real
     // mOSD frames: 59 -> 41 ms median without them), finding nothing more on any set of make results.
-    std::optional<Detection> other = recognize_cluster(rest_points, frame, verify, out, nullptr, votes);
+    std::optional<Detection> other = recognize_cluster(rest_points, frame, verify, out, votes);
     if (!other) continue;
     // The kept pose on what the other leaves of the region: its own share, judged as a part.
     const auto tv = Clock::now();
@@ -1100,16 +1090,15 @@ void Recognizer::turn_if_better(const Region& region, Detection& best, const Fra
 }
 
 std::optional<Detection> Recognizer::recognize_cluster(const PointCloud& points, const FrameAndPlanes& frame,
-                                                       const VerifyOptions& verify, Recognition& out,
-                                                       std::optional<Detection>* partial, bool votes) const {
+                                                       const VerifyOptions& verify, Recognition& out, bool votes) const {
   std::vector<Region> regions;
   if (std::optional<Region> region = describe_region(points, frame, verify, out)) regions.push_back(std::move(*region));
-  return search(regions, frame, out, partial, votes);
+  return search(regions, frame, out, nullptr, votes);
 }
 
 std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const FrameAndPlanes& frame, Recognition& out,
                                             std::optional<Detection>* partial, bool votes, std::optional<Detection>* seed,
-                                            std::size_t max_poses) const {
+                                            std::size_t max_poses, std::size_t* found_in) const {
   // The starting poses of every region, best first across them (by the screen, else coarse fit), a
   // batch at a time from one region, until one passes or the budget is spent (with keep_best: all
   // of them, the best kept). The regions share the budget: the parts of one cluster compete for it.
@@ -1227,14 +1216,15 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
       }
     };
     if (seed) best_kept(&Region::best_seed, *seed);
-    if (partial) {
-      best_kept(&Region::best_partial, *partial);
-      if (*partial && options_.accept.canonical_poses) {
-        (*partial)->T_camera_object = canonical_pose((*partial)->T_camera_object, db_.objects[(*partial)->object_index].symmetries);
-      }
+    std::optional<Detection> kept;
+    if (partial) best_kept(&Region::best_partial, kept);
+    if (kept && (!*partial || kept->verification.score > (*partial)->verification.score)) {
+      if (options_.accept.canonical_poses) kept->T_camera_object = canonical_pose(kept->T_camera_object, db_.objects[kept->object_index].symmetries);
+      *partial = std::move(kept);
     }
     return best;
   }
+  if (found_in) *found_in = best_region;
   const Region& region = regions[best_region];
   if (!options_.accept.keep_best && options_.match.challenger_views > 0) challenge(region, next[best_region], end[best_region], *best, frame, out);
   if (options_.accept.try_half_turns && !out_of_time(out)) turn_if_better(region, *best, frame, out);

@@ -780,10 +780,41 @@ TEST(Recognize, AClusterWhoseFirstBatchFailsGoesOnWithItsPartsInOneBudget) {
   const auto spent = [](const Recognition& r) { return r.hypotheses + r.screened_out; };
   const std::size_t budget = together.match.max_hypotheses, batch = together.run.batch;
   const std::size_t batches = 1 + (budget + batch - 1) / batch;
+  EXPECT_GE(spent(t), batch + budget) << "its first batch, then one budget with its parts";
   EXPECT_LE(spent(t), batch + budget + 3 * batches);
   EXPECT_GE(spent(a), 2 * budget) << "alone, then its parts";
   EXPECT_LT(spent(t), spent(a));
   EXPECT_LT(t.screened, a.screened);
+  // The whole cluster's untried poses go on first among the regions: of the first round, in which
+  // each region tries a batch, one place is theirs, and one part fewer is reached than when the
+  // parts had a budget of their own.
+  EXPECT_EQ(t.parts_unreached, a.parts_unreached + 1);
+}
+
+TEST(Recognize, APoseThatPassesInTheFirstBatchIsStillChallengedByTheOtherObjects) {
+  // The jug alone, a jug a tenth larger in the database too (its views match the cluster as well).
+  // The cluster's first batch is searched alone, capped at one batch (SplitOptions::whole_with_parts);
+  // the larger jug's next poses in the budget's range must still challenge the pose that passes
+  // there (MatchOptions::challenger_views): more poses spent than without challengers, and the
+  // right jug found.
+  static const ViewDatabase db = [] {
+    TriangleMesh larger = make_jug();
+    for (auto& v : larger.vertices) v *= 1.1f;
+    const std::vector<ObjectModel> models = {{1, "jug", make_jug()}, {2, "larger jug", larger}};
+    return build_view_database(models, DatabaseParams{});
+  }();
+  RecognizerOptions challenged, unchallenged;
+  unchallenged.match.challenger_views = 0;
+  ASSERT_GT(challenged.match.challenger_views, 0u) << "the default";
+  const Recognizer with(db, challenged), without(db, unchallenged);
+  for (std::size_t image = 0; image < 3; ++image) {
+    const Frame frame = jug_at_one_metre(3, image, SensorModel::kinect_v1(), 70 + image);
+    const Recognition c = with.recognize(frame), u = without.recognize(frame);
+    ASSERT_EQ(c.detections.size(), 1u) << "image " << image;
+    ASSERT_EQ(u.detections.size(), 1u) << "image " << image;
+    EXPECT_EQ(c.detections[0].object_id, 1) << "image " << image;
+    EXPECT_GT(c.hypotheses + c.screened_out, u.hypotheses + u.screened_out) << "image " << image;
+  }
 }
 
 TEST(Recognize, AnObjectTallerThanARiserBesideItIsNotTakenToStandInsideTheRiser) {

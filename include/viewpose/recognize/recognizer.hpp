@@ -442,7 +442,7 @@ class Recognizer {
   // Describe, match, align, refine and verify one cluster; the first (or best) accepted pose.
   // With `votes`, where no view's pose passes, the point pair votes' (PoseSource both, touching).
   std::optional<Detection> recognize_cluster(const PointCloud& points, const FrameAndPlanes& frame, const VerifyOptions& verify,
-                                             Recognition& out, std::optional<Detection>* partial = nullptr, bool votes = false) const;
+                                             Recognition& out, bool votes = false) const;
   struct Refined;
   // A starting pose: a database view (by its rank among the region's matches) turned by one CRH roll,
   // or a pose from point pair votes (match: kFromPairVotes).
@@ -483,7 +483,7 @@ class Recognizer {
     VerifyOptions seed;  // verify without the model's support bound (SplitOptions::grow_reach_m)
     // The best pose that passed `seed` and was not accepted (its cluster_points: point_count).
     mutable std::optional<Detection> best_seed;
-    bool gives_seed = true;  // false: a whole cluster searched on with its parts (only parts are grown)
+    bool gives_seed = true;  // false: a whole cluster (only parts are grown: SplitOptions::grow_reach_m)
     // Its first `tried` candidates were refined already (a whole cluster's first batch, searched on
     // alone or with its parts): the search starts after them, within the same range for challengers.
     std::size_t tried = 0;
@@ -509,16 +509,19 @@ class Recognizer {
   // coarse fit), within one budget (the convex parts of a cluster share it); the first accepted (or
   // the best), challenged and turned.
   // With `partial`: where nothing passes, the best pose that failed only by the share of its region
-  // it explains (SplitOptions::joint_min_cluster_explained), if any, for explain_jointly. With
+  // it explains (SplitOptions::joint_min_cluster_explained), if any and better than the one it holds
+  // (a search that goes on keeps what it found before), for explain_jointly. With
   // `seed`: the best that met every bound but the model's support and was not accepted, to grow
   // (SplitOptions::grow_reach_m). Two or more regions (a split cluster's parts, and the whole
   // cluster's untried poses first: SplitOptions::whole_with_parts) each try their first batch,
   // within the budget, before the order across them. `max_poses`: at most this many poses spent
   // in this call (each region's range, which challengers are taken from, stays the budget's).
+  // `found_in`: the index of the region the pose returned was found in.
   std::optional<Detection> search(std::vector<Region>& regions, const FrameAndPlanes& frame, Recognition& out,
                                   std::optional<Detection>* partial = nullptr, bool votes = false,
                                   std::optional<Detection>* seed = nullptr,
-                                  std::size_t max_poses = std::numeric_limits<std::size_t>::max()) const;
+                                  std::size_t max_poses = std::numeric_limits<std::size_t>::max(),
+                                  std::size_t* found_in = nullptr) const;
   // The points of `points` within SplitOptions::grow_reach_m of `seed`'s model, the piece of them
   // it lies on (pose/points_on_model).
   PointCloud grown_region(const PointCloud& points, const Detection& seed) const;
