@@ -174,7 +174,7 @@ PYBIND11_MODULE(viewpose, m) {
       .def_readonly("regions", &Recognition::regions)
       .def_readonly("parts_unreached", &Recognition::parts_unreached,
                     "Convex parts of split clusters the search never reached (a pose found, the budget spent or the deadline passed first): not described")
-      .def_readonly("split_clusters", &Recognition::split_clusters, "Clusters in which nothing passed, tried again in convex parts")
+      .def_readonly("split_clusters", &Recognition::split_clusters, "Clusters whose search went on in their convex parts")
       .def_readonly("joined_regions", &Recognition::joined_regions, "Pairs of unexplained pieces searched as one region")
       .def_readonly("grown_regions", &Recognition::grown_regions,
                     "Regions grown from a part's pose into the rest of its cluster and searched again")

@@ -499,6 +499,7 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   std::size_t found_in = 0;
   std::optional<Detection> det = search(regions, frame, out, &partial, votes, &seed, std::numeric_limits<std::size_t>::max(), &found_in);
   out.parts_unreached += static_cast<std::size_t>(std::count_if(regions.begin(), regions.end(), [](const Region& r) { return r.pending.has_value(); }));
+  const bool in_whole = det && with_whole && found_in == 0;  // (else in a part, or below in a grown region)
   if (!det && seed && !out_of_time(out)) {
     // A part's pose that met every part bound but the model's support and was not accepted: much
     // of the model it shows lies outside the part (a mug's outer wall, cut from its inside and
@@ -517,7 +518,7 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
     if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
     return;
   }
-  det->from_split_cluster = !(with_whole && found_in == 0);  // (not found in the whole region)
+  det->from_split_cluster = !in_whole;
   recognize_rest(points, std::move(*det), frame, out, depth);
 }
 

@@ -1172,6 +1172,7 @@ TEST(RealData, AMugAgainstObjectsNotInTheDatabaseIsGrownFromItsPart) {
       EXPECT_EQ(r.detections.size(), found.size()) << "a detection that is not the mug";
       EXPECT_EQ(found.count(14), grow_reach_m > 0 ? 1u : 0u);
       EXPECT_EQ(r.grown_regions > 0, grow_reach_m > 0);
+      for (const Detection& d : r.detections) EXPECT_TRUE(d.from_split_cluster) << "grown from a part, not the whole cluster";
     }
   }
 }

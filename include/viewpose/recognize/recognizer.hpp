@@ -483,7 +483,9 @@ class Recognizer {
     VerifyOptions seed;  // verify without the model's support bound (SplitOptions::grow_reach_m)
     // The best pose that passed `seed` and was not accepted (its cluster_points: point_count).
     mutable std::optional<Detection> best_seed;
-    bool gives_seed = true;  // false: a whole cluster (only parts are grown: SplitOptions::grow_reach_m)
+    // false: a whole cluster in recognize_region, whose search may go on with its parts (only
+    // parts are grown: SplitOptions::grow_reach_m). (Other regions are searched without a seed.)
+    bool gives_seed = true;
     // Its first `tried` candidates were refined already (a whole cluster's first batch, searched on
     // alone or with its parts): the search starts after them, within the same range for challengers.
     std::size_t tried = 0;
@@ -516,7 +518,7 @@ class Recognizer {
   // cluster's untried poses first: SplitOptions::whole_with_parts) each try their first batch,
   // within the budget, before the order across them. `max_poses`: at most this many poses spent
   // in this call (each region's range, which challengers are taken from, stays the budget's).
-  // `found_in`: the index of the region the pose returned was found in.
+  // `found_in`: the index of the region the pose returned was found in (untouched when none is).
   std::optional<Detection> search(std::vector<Region>& regions, const FrameAndPlanes& frame, Recognition& out,
                                   std::optional<Detection>* partial = nullptr, bool votes = false,
                                   std::optional<Detection>* seed = nullptr,
