@@ -496,10 +496,10 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
     regions.push_back(pending_region(std::move(part_points), part_verify));
   }
   std::optional<Detection> seed;
-  std::size_t found_in = 0;
+  std::size_t found_in = regions.size();
   std::optional<Detection> det = search(regions, frame, out, &partial, votes, &seed, std::numeric_limits<std::size_t>::max(), &found_in);
   out.parts_unreached += static_cast<std::size_t>(std::count_if(regions.begin(), regions.end(), [](const Region& r) { return r.pending.has_value(); }));
-  const bool in_whole = det && with_whole && found_in == 0;  // (else in a part, or below in a grown region)
+  const bool in_whole = with_whole && found_in == 0;  // (else in a part, below in a grown region, or nowhere)
   if (!det && seed && !out_of_time(out)) {
     // A part's pose that met every part bound but the model's support and was not accepted: much
     // of the model it shows lies outside the part (a mug's outer wall, cut from its inside and
@@ -1113,6 +1113,7 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
   // one measure (each part when the search reaches it, below). The exhaustive search (and
   // keep_best) tries every pose anyway: no order to choose.
   const bool screen = !every && options_.match.prescreen > 0;
+  if (found_in) *found_in = regions.size();  // (none, until a pose is returned)
   std::vector<std::size_t> next(regions.size(), 0), end(regions.size());
   std::optional<Detection> best;
   std::size_t best_region = 0;
@@ -1209,20 +1210,20 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
     }
   }
   if (!best) {
-    // The best of the regions' kept poses (best_seed, best_partial) into `into`.
-    const auto best_kept = [&](std::optional<Detection> Region::*kept, std::optional<Detection>& into) {
+    // The best of the regions' kept poses (best_seed, best_partial) into `into`, where it is better
+    // than what `into` holds (the first of equals); canonical, if asked, when it replaces it.
+    const auto best_kept = [&](std::optional<Detection> Region::*kept, std::optional<Detection>& into, bool canonical) {
+      const Detection* better = into ? &*into : nullptr;
       for (const Region& region : regions) {
         const std::optional<Detection>& k = region.*kept;
-        if (k && (!into || k->verification.score > into->verification.score)) into = k;
+        if (k && (!better || k->verification.score > better->verification.score)) better = &*k;
       }
+      if (!better || (into && better == &*into)) return;
+      into = *better;
+      if (canonical) into->T_camera_object = canonical_pose(into->T_camera_object, db_.objects[into->object_index].symmetries);
     };
-    if (seed) best_kept(&Region::best_seed, *seed);
-    std::optional<Detection> kept;
-    if (partial) best_kept(&Region::best_partial, kept);
-    if (kept && (!*partial || kept->verification.score > (*partial)->verification.score)) {
-      if (options_.accept.canonical_poses) kept->T_camera_object = canonical_pose(kept->T_camera_object, db_.objects[kept->object_index].symmetries);
-      *partial = std::move(kept);
-    }
+    if (seed) best_kept(&Region::best_seed, *seed, false);
+    if (partial) best_kept(&Region::best_partial, *partial, options_.accept.canonical_poses);
     return best;
   }
   if (found_in) *found_in = best_region;

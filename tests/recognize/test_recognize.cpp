@@ -1178,6 +1178,32 @@ TEST(RealData, AMugAgainstObjectsNotInTheDatabaseIsGrownFromItsPart) {
   }
 }
 
+TEST(RealData, AMugGrownFromAPartOfAClusterThatWentOnWithItsPartsIsMarkedAsFromASplitCluster) {
+  // The case above with the master chef can (not in the frame) in the database too: it is wide
+  // enough to be tried on the whole cluster of the mug, the brick and the box, so the whole
+  // cluster's first batch fails with poses left, and it goes on with its convex parts in one
+  // budget (SplitOptions::whole_with_parts, the whole cluster as region 0). None passes; the mug's
+  // pose grown from its part's seed does. Measured in frame 3 (with the can, the box or the
+  // pitcher beside the mug): reached, and marked found in the whole cluster when that was judged
+  // from which region the search returned without checking that it returned a pose (the fault
+  // of 4a3b621 that f1e98c5 mended: this test fails with it, checked).
+#ifdef VIEWPOSE_SANITIZER_BUILD
+  GTEST_SKIP() << "skipped under the sanitizers: real frames against a database take minutes there";
+#endif
+  VIEWPOSE_REQUIRE_SHARED_DATA();
+  const BopDataset ds = open_bop_dataset(test::shared_data() / "ycbv_real_dev", "test", {"models"});
+  const ViewDatabase db = ycbv_dev_database(ds, {1, 14});
+  const BopImage* image = find_image(ds, 0, 3);
+  ASSERT_NE(image, nullptr);
+  const BopFrame bf = load_bop_frame(*image);
+  const Recognition r = Recognizer(db).recognize(frame_from_depth(bf.depth, bf.K));
+  EXPECT_EQ(ids_of(right_detections(r, db, *image)), std::set<int>{14});
+  ASSERT_EQ(r.detections.size(), 1u) << "a detection that is not the mug";
+  EXPECT_GT(r.grown_regions, 0u);
+  EXPECT_GT(r.split_clusters, 0u);
+  EXPECT_TRUE(r.detections[0].from_split_cluster) << "grown from a part, not found in the whole cluster";
+}
+
 TEST(RealData, APileOfThreeSmallObjectsIsSplitWhenOnlyTheyAreInTheDatabase) {
   // YCB-Video 0000 (ycbv_real_dev): the gelatin box, the mug and the foam brick touch, one cluster
   // 0.28 m across. With only these three in the database (the largest 0.125 m) a region more than

@@ -518,7 +518,7 @@ class Recognizer {
   // cluster's untried poses first: SplitOptions::whole_with_parts) each try their first batch,
   // within the budget, before the order across them. `max_poses`: at most this many poses spent
   // in this call (each region's range, which challengers are taken from, stays the budget's).
-  // `found_in`: the index of the region the pose returned was found in (untouched when none is).
+  // `found_in`: the index of the region the pose returned was found in; regions.size() when none is.
   std::optional<Detection> search(std::vector<Region>& regions, const FrameAndPlanes& frame, Recognition& out,
                                   std::optional<Detection>* partial = nullptr, bool votes = false,
                                   std::optional<Detection>* seed = nullptr,
