@@ -178,6 +178,8 @@ PYBIND11_MODULE(viewpose, m) {
       .def_readonly("joined_regions", &Recognition::joined_regions, "Pairs of unexplained pieces searched as one region")
       .def_readonly("grown_regions", &Recognition::grown_regions,
                     "Regions grown from a part's pose into the rest of its cluster and searched again")
+      .def_readonly("voted_regions", &Recognition::voted_regions,
+                    "Regions in which point pair votes were cast (each object's votes once per region)")
       .def_readonly("dropped_as_explained", &Recognition::dropped_as_explained,
                     "Detections dropped because a more confident one explains the same pixels")
       .def_readonly("dropped_inside_planes", &Recognition::dropped_inside_planes,

@@ -74,7 +74,8 @@ struct RecognizeFlags {
                    "Where starting poses come from: vfh (each cluster's nearest database views, as the thesis), ppf "
                    "(point pair feature votes over the cluster: touching and half-hidden objects; about 7 ms per "
                    "object and cluster more), both (the views' poses first; where none passes, the votes'), or touching (as both, "
-                   "but votes only in what a detection leaves of its region: objects touching it)")
+                   "but votes only in what a detection leaves of its region, where neither its views' poses nor its convex parts' "
+                   "pass: objects touching it)")
         ->check(CLI::IsMember(std::vector<std::string>(std::begin(kPoseSourceNames), std::end(kPoseSourceNames))))
         ->capture_default_str();
     cmd.add_option("--deadline-ms", deadline_ms,

@@ -84,7 +84,7 @@ def test_the_counters_are_the_jsons(scene):
     r = rec.recognize(viewpose.read_depth_png(png), K=scene["K"], depth_scale=scene["scale"])
     j = json.loads(r.to_json(with_times=False))
     counters = ("clusters", "hypotheses", "repeats", "screened", "screened_out", "regions", "parts_unreached", "split_clusters",
-                "joined_regions", "grown_regions", "dropped_as_explained", "dropped_inside_planes",
+                "joined_regions", "grown_regions", "voted_regions", "dropped_as_explained", "dropped_inside_planes",
                 "lifted_out_of_planes")
     for name in counters:
         assert getattr(r, name) == j[name], name

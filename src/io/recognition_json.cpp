@@ -39,7 +39,8 @@ nlohmann::json recognition_json(const Recognition& r, bool with_times) {
                       {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"parts_unreached", r.parts_unreached}, {"hypotheses", r.hypotheses}, {"repeats", r.repeats}, {"screened", r.screened}, {"screened_out", r.screened_out},
                       {"dropped_as_explained", r.dropped_as_explained}, {"dropped_inside_planes", r.dropped_inside_planes},
                       {"lifted_out_of_planes", r.lifted_out_of_planes},
-                      {"joined_regions", r.joined_regions}, {"grown_regions", r.grown_regions}};
+                      {"joined_regions", r.joined_regions}, {"grown_regions", r.grown_regions},
+                      {"voted_regions", r.voted_regions}};
   if (with_times) {
     const StageTimes& t = r.times;
     j["times_ms"] = {{"downsample", t.downsample_ms}, {"segment", t.segment_ms}, {"normals", t.normals_ms},

@@ -382,6 +382,7 @@ void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   out.lifted_out_of_planes += part.lifted_out_of_planes;
   out.joined_regions += part.joined_regions;
   out.grown_regions += part.grown_regions;
+  out.voted_regions += part.voted_regions;
   out.cut_short = out.cut_short || part.cut_short;
 }
 
@@ -413,7 +414,16 @@ void Recognizer::resolve_scene(const FrameAndPlanes& frame, Recognition& out) co
   out.times.verify_ms += ms_since(t);
 }
 
-void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth) const {
+void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth,
+                                  VotePass pass) const {
+  const PoseSource source = options_.match.source;
+  if (pass == VotePass::as_source && source == PoseSource::touching && depth > 0 && options_.match.votes_after_parts) {
+    // What a detection left: the views' poses, whole and in parts; where nothing passes, votes.
+    const std::size_t before = out.detections.size();
+    recognize_region(points, frame, out, depth, VotePass::none);
+    if (out.detections.size() == before && !out_of_time(out)) recognize_region(points, frame, out, depth, VotePass::only);
+    return;
+  }
   // Anything found inside a split cluster stands on less evidence than an isolated cluster, and is
   // checked more strictly.
   const VerifyOptions part_verify = part_verify_options();
@@ -427,9 +437,27 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   const double size = bounding_box(points.points).diagonal();
   // Point pair votes after the views' poses: everywhere (both), or in what a detection left (depth
   // above 0: an object touching the one found).
-  const PoseSource source = options_.match.source;
-  const bool votes = source == PoseSource::both || (source == PoseSource::touching && depth > 0);
+  const bool votes = pass == VotePass::as_source ? source == PoseSource::both || (source == PoseSource::touching && depth > 0)
+                                                 : pass == VotePass::only;
   std::optional<Detection> partial;  // a pose that explains part of the region well (joint_min_cluster_explained)
+  if (pass == VotePass::only) {
+    // The views' poses were tried, whole and in parts: the whole region's votes alone (its views'
+    // poses counted as tried), and a pose that explains part of it, with what it leaves.
+    if (size > options_.match.max_region_size_factor * largest_diameter_m_) return;
+    std::vector<Region> whole;
+    if (std::optional<Region> region = describe_region(points, frame, depth > 0 ? part_verify : options_.verify, out)) {
+      region->gives_seed = false;
+      region->tried = region->candidates.size();
+      whole.push_back(std::move(*region));
+    }
+    if (std::optional<Detection> det = search(whole, frame, out, &partial, true)) {
+      det->from_split_cluster = depth > 0;
+      recognize_rest(points, std::move(*det), frame, out, depth);
+    } else if (partial && options_.split.enabled && !out_of_time(out)) {
+      explain_jointly(points, *partial, frame, part_verify, out, depth, true);
+    }
+    return;
+  }
   // A cluster whose first batch of poses fails goes on in one budget with its convex parts, if it
   // has any (SplitOptions::whole_with_parts).
   const bool every = options_.accept.keep_best || options_.match.max_hypotheses == 0;
@@ -917,6 +945,7 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
   });
   if (options_.match.source == PoseSource::ppf) {
     for (Candidate& c : pair_vote_candidates(region)) candidates.push_back(c);
+    ++out.voted_regions;
   }
   // Best fit first; equal fits keep the order of the views' VFH distance and their rolls' peaks.
   std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) { return a.fit > b.fit; });
@@ -1144,7 +1173,7 @@ std::optional<Detection> Recognizer::search(std::vector<Region>& regions, const 
     const auto cast_votes = [&](Region& region) {
       const auto t = Clock::now();
       region.candidates.clear();
-      if (region.description.cloud.size() >= 3) region.candidates = pair_vote_candidates(region);  // (else: no poses)
+      if (region.description.cloud.size() >= 3) region.candidates = pair_vote_candidates(region), ++out.voted_regions;  // (else: no poses)
       region.screened_poses.clear();
       std::stable_sort(region.candidates.begin(), region.candidates.end(), [](const Candidate& x, const Candidate& y) { return x.fit > y.fit; });
       interleave_by_object(region.candidates.begin(), region.candidates.end());

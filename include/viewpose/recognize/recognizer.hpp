@@ -57,11 +57,18 @@ inline std::string_view pose_source_name(PoseSource source) { return kPoseSource
 /// Which database views are tried for a region (a cluster, a convex part, what a detection left of
 /// a cluster), the poses each gives, and in what order they are refined and verified.
 struct MatchOptions {
-  /// `touching` by default: on the real YCB-V frames it finds 27 of 28 poses where `vfh` finds 25,
-  /// at 0.10 s a frame median against 0.07 (docs/BENCHMARK.md, "Point pair votes"); votes cost
-  /// about 7 ms per object and region of a real frame, and are cast only where a detection leaves
-  /// part of its region.
+  /// `touching` by default: on the real YCB-V dev frames it finds 28 of 28 poses where `vfh` finds
+  /// 26 (docs/BENCHMARK.md, "Point pair votes"); votes cost about 7 ms per object and region of a
+  /// real frame, and are cast only where a detection leaves part of its region.
   PoseSource source = PoseSource::touching;
+  /// With `touching`: in what a detection leaves of its region, the views' poses are tried on the
+  /// whole of it and then on its convex parts (as `vfh` tries them), and the votes are cast only
+  /// where none of these passes, in the whole of it. (Else the votes come after the whole region's
+  /// views' poses, before its parts'.) Two objects touching each other beside a third are most often
+  /// told apart by the crease between them, and a part's views cost less than votes for every
+  /// object. Measured on the real YCB-V dev frames: the same 28 poses (within 0.5 mm), the vote
+  /// stage's time 23 -> 9 ms a frame (median), the frame 78-81 -> 68 ms (docs/BENCHMARK.md).
+  bool votes_after_parts = true;
   /// The pair tables and votes (every source but vfh). Each object's table is the database's where
   /// it stores one made with these options (DatabaseParams::ppf; loaded, or read from its file when
   /// first needed where the database was loaded without them), else made when the recognizer is
@@ -412,6 +419,9 @@ struct Recognition {
   std::size_t joined_regions = 0;
   /// Regions grown from a part's pose into the rest of its cluster and searched (SplitOptions::grow_reach_m).
   std::size_t grown_regions = 0;
+  /// Regions in which point pair votes were cast (MatchOptions::source), each object's votes once
+  /// per region: where most of a frame's time goes when it casts them.
+  std::size_t voted_regions = 0;
   /// RecognizerOptions::deadline_ms ran out: clusters, views or checks were left untried.
   bool cut_short = false;
   Clock::time_point started{};  ///< when recognize() began (the deadline counts from it)
@@ -559,9 +569,14 @@ class Recognizer {
   // `best` turned half a turn about each of its axes; the best of the four is kept.
   void turn_if_better(const Region& region, Detection& best, const FrameAndPlanes& frame, Recognition& out) const;
   Detection detection_from(const Refined& h, const Region& region, const Candidate& c) const;
+  // Which poses a region's search may take from point pair votes: as MatchOptions::source says, none
+  // (the views' alone, whole and in parts), or only the votes, in the whole region (its views'
+  // poses and parts tried already: MatchOptions::votes_after_parts).
+  enum class VotePass { as_source, none, only };
   // A cluster, or what is left of one: recognized whole, else split into convex parts; once a part
   // is recognized, its object's points are taken away and the rest recognized again (depth + 1).
-  void recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth) const;
+  void recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth,
+                        VotePass pass = VotePass::as_source) const;
   // A piece of the frame no detection explains: a cluster no detection reaches, or a cluster of
   // what detections leave of one.
   struct Piece {
