@@ -417,8 +417,10 @@ void Recognizer::resolve_scene(const FrameAndPlanes& frame, Recognition& out) co
 void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth,
                                   VotePass pass) const {
   const PoseSource source = options_.match.source;
-  if (pass == VotePass::as_source && source == PoseSource::touching && depth > 0 && options_.match.votes_after_parts) {
-    // What a detection left: the views' poses, whole and in parts; where nothing passes, votes.
+  if (pass == VotePass::as_source && source == PoseSource::touching && depth > 0 && options_.match.votes_after_parts &&
+      bounding_box(points.points).diagonal() <= options_.match.max_region_size_factor * largest_diameter_m_) {
+    // What a detection left: the views' poses, whole and in parts; where nothing passes, votes in
+    // the whole of it. (One too wide to be searched whole has votes in its parts, as before.)
     const std::size_t before = out.detections.size();
     recognize_region(points, frame, out, depth, VotePass::none);
     if (out.detections.size() == before && !out_of_time(out)) recognize_region(points, frame, out, depth, VotePass::only);
@@ -439,17 +441,22 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   // above 0: an object touching the one found).
   const bool votes = pass == VotePass::as_source ? source == PoseSource::both || (source == PoseSource::touching && depth > 0)
                                                  : pass == VotePass::only;
+  // What the region's poses leave to search apart (a kept pose's rest, a region grown from a part's
+  // seed) is searched with votes wherever the source casts them here: the first of two passes
+  // leaves out only the votes of the region itself and of its parts.
+  const bool rest_votes = votes || pass == VotePass::none;
   std::optional<Detection> partial;  // a pose that explains part of the region well (joint_min_cluster_explained)
   if (pass == VotePass::only) {
     // The views' poses were tried, whole and in parts: the whole region's votes alone (its views'
     // poses counted as tried), and a pose that explains part of it, with what it leaves.
-    if (size > options_.match.max_region_size_factor * largest_diameter_m_) return;
     std::vector<Region> whole;
+    const std::size_t regions = out.regions;  // (counted once, in the first pass)
     if (std::optional<Region> region = describe_region(points, frame, depth > 0 ? part_verify : options_.verify, out)) {
       region->gives_seed = false;
       region->tried = region->candidates.size();
       whole.push_back(std::move(*region));
     }
+    out.regions = regions;
     if (std::optional<Detection> det = search(whole, frame, out, &partial, true)) {
       det->from_split_cluster = depth > 0;
       recognize_rest(points, std::move(*det), frame, out, depth);
@@ -501,7 +508,7 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   if (!options_.split.enabled || depth >= options_.split.max_depth ||
       size > std::max(options_.split.min_size_m, options_.split.max_size_factor * largest_diameter_m_) || out_of_time(out)) {
     if (search_on_alone()) return;
-    if (partial && options_.split.enabled && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
+    if (partial && options_.split.enabled && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, rest_votes);
     return;
   }
   auto t = Clock::now();
@@ -510,7 +517,7 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   // One part that is nearly the whole region: the whole region's search goes on, alone.
   if (parts.empty() || (parts.size() == 1 && parts[0].size() > 0.9 * static_cast<double>(points.size()))) {
     if (search_on_alone()) return;
-    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
+    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, rest_votes);
     return;
   }
   ++out.split_clusters;
@@ -537,13 +544,13 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
     const PointCloud grown = grown_region(points, *seed);
     if (grown.size() > seed->cluster_points && grown.size() < points.size()) {
       ++out.grown_regions;
-      det = recognize_cluster(grown, frame, part_verify, out, votes);
+      det = recognize_cluster(grown, frame, part_verify, out, rest_votes);
     }
   }
   if (!det) {
     // No part passed alone: a pose that explains part of the region (or of a part) well, and
     // whatever the rest of the region is.
-    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, votes);
+    if (partial && !out_of_time(out)) explain_jointly(points, *partial, frame, part_verify, out, depth, rest_votes);
     return;
   }
   det->from_split_cluster = !in_whole;
@@ -677,7 +684,8 @@ void Recognizer::explain_jointly(const PointCloud& points, const Detection& part
     const PointCloud rest_points = cluster_points(points, c);
     if (bounding_box(rest_points.points).diagonal() > options_.match.max_region_size_factor * largest_diameter_m_) continue;
     // The rest is searched as the region was (`votes`: both everywhere, touching in what a
-    // detection left): a kept pose is not yet a detection, and with `touching` votes cast in the
+    // detection left, there even in the pass of the views' poses alone, MatchOptions::
+    // votes_after_parts): a kept pose is not yet a detection, and with `touching` votes cast in the
     // rest of every such pose in a whole cluster were most of a frame of unknown things' time (real
     // mOSD frames: 59 -> 41 ms median without them), finding nothing more on any set of make results.
     std::optional<Detection> other = recognize_cluster(rest_points, frame, verify, out, votes);

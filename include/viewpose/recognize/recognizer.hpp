@@ -58,16 +58,19 @@ inline std::string_view pose_source_name(PoseSource source) { return kPoseSource
 /// a cluster), the poses each gives, and in what order they are refined and verified.
 struct MatchOptions {
   /// `touching` by default: on the real YCB-V dev frames it finds 28 of 28 poses where `vfh` finds
-  /// 26 (docs/BENCHMARK.md, "Point pair votes"); votes cost about 7 ms per object and region of a
+  /// 26 (docs/BENCHMARK.md, "A region's parts before its votes"; "Point pair votes" has the
+  /// history); votes cost about 7 ms per object and region of a
   /// real frame, and are cast only where a detection leaves part of its region.
   PoseSource source = PoseSource::touching;
   /// With `touching`: in what a detection leaves of its region, the views' poses are tried on the
-  /// whole of it and then on its convex parts (as `vfh` tries them), and the votes are cast only
-  /// where none of these passes, in the whole of it. (Else the votes come after the whole region's
-  /// views' poses, before its parts'.) Two objects touching each other beside a third are most often
-  /// told apart by the crease between them, and a part's views cost less than votes for every
-  /// object. Measured on the real YCB-V dev frames: the same 28 poses (within 0.5 mm), the vote
-  /// stage's time 23 -> 9 ms a frame (median), the frame 78-81 -> 68 ms (docs/BENCHMARK.md).
+  /// whole of it and then on its convex parts (as `vfh` tries them; what a kept pose leaves, or a
+  /// region grown from a part's pose, with votes as before), and the votes are cast only where
+  /// none of these passes, in the whole of it. (Off, or in a region too wide to be searched whole:
+  /// the votes after the whole region's views' poses, and in each part after its views'.) Two
+  /// objects touching each other beside a third are most often told apart by the crease between
+  /// them, and a part's views cost less than votes for every object. Measured on the real YCB-V
+  /// dev frames: the same 28 poses (within 0.5 mm), the vote stage's median 22-29 -> 9 ms a
+  /// frame, the frame's 76-101 -> 63-66 ms (docs/BENCHMARK.md). Not on the command line.
   bool votes_after_parts = true;
   /// The pair tables and votes (every source but vfh). Each object's table is the database's where
   /// it stores one made with these options (DatabaseParams::ppf; loaded, or read from its file when
@@ -419,8 +422,9 @@ struct Recognition {
   std::size_t joined_regions = 0;
   /// Regions grown from a part's pose into the rest of its cluster and searched (SplitOptions::grow_reach_m).
   std::size_t grown_regions = 0;
-  /// Regions in which point pair votes were cast (MatchOptions::source), each object's votes once
-  /// per region: where most of a frame's time goes when it casts them.
+  /// Regions in which point pair votes were called for (MatchOptions::source): each object wide
+  /// enough for the region, with a pair table, votes once there; where most of a frame's time goes
+  /// when it casts them.
   std::size_t voted_regions = 0;
   /// RecognizerOptions::deadline_ms ran out: clusters, views or checks were left untried.
   bool cut_short = false;
@@ -497,7 +501,9 @@ class Recognizer {
     // parts are grown: SplitOptions::grow_reach_m). (Other regions are searched without a seed.)
     bool gives_seed = true;
     // Its first `tried` candidates were refined already (a whole cluster's first batch, searched on
-    // alone or with its parts): the search starts after them, within the same range for challengers.
+    // alone or with its parts; all of a region's views' poses, for its votes alone:
+    // MatchOptions::votes_after_parts): the search starts after them, within the same range for
+    // challengers.
     std::size_t tried = 0;
     std::size_t point_count = 0;  // the region's points (the description keeps those with normals)
     // By object, the refined poses verification refused so far (try_candidates skips their
