@@ -414,18 +414,46 @@ void Recognizer::resolve_scene(const FrameAndPlanes& frame, Recognition& out) co
   out.times.verify_ms += ms_since(t);
 }
 
-void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth,
-                                  VotePass pass) const {
+void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth) const {
   const PoseSource source = options_.match.source;
-  if (pass == VotePass::as_source && source == PoseSource::touching && depth > 0 && options_.match.votes_after_parts &&
+  // Point pair votes after the views' poses: everywhere (both), or in what a detection left (depth
+  // above 0: an object touching the one found).
+  const bool votes = source == PoseSource::both || (source == PoseSource::touching && depth > 0);
+  if (source == PoseSource::touching && depth > 0 && options_.match.votes_after_parts &&
       bounding_box(points.points).diagonal() <= options_.match.max_region_size_factor * largest_diameter_m_) {
     // What a detection left: the views' poses, whole and in parts; where nothing passes, votes in
-    // the whole of it. (One too wide to be searched whole has votes in its parts, as before.)
+    // the whole of it, described once. (One too wide to be searched whole has votes in its parts,
+    // below.) What the views' poses leave to search apart (a kept pose's rest, a region grown from
+    // a part's seed) is searched with votes, as without the option.
     const std::size_t before = out.detections.size();
-    recognize_region(points, frame, out, depth, VotePass::none);
-    if (out.detections.size() == before && !out_of_time(out)) recognize_region(points, frame, out, depth, VotePass::only);
+    std::optional<Region> whole;
+    search_region(points, frame, out, depth, {.region = false, .rest = true}, &whole);
+    if (out.detections.size() == before && whole && !out_of_time(out)) search_votes_alone(points, std::move(*whole), frame, out, depth);
     return;
   }
+  search_region(points, frame, out, depth, {.region = votes, .rest = votes}, nullptr);
+}
+
+void Recognizer::search_votes_alone(const PointCloud& points, Region whole, const FrameAndPlanes& frame, Recognition& out, int depth) const {
+  // Its views' poses were tried: they count as tried, and the poses verification refused stay
+  // refused (a vote's pose refined onto one is not verified again). What the first pass kept to
+  // grow or to explain jointly was used there.
+  whole.tried = whole.candidates.size();
+  whole.best_partial.reset();
+  whole.best_seed.reset();
+  std::vector<Region> regions;
+  regions.push_back(std::move(whole));
+  std::optional<Detection> partial;  // a pose that explains part of the region well
+  if (std::optional<Detection> det = search(regions, frame, out, &partial, true)) {
+    det->from_split_cluster = depth > 0;
+    recognize_rest(points, std::move(*det), frame, out, depth);
+  } else if (partial && options_.split.enabled && !out_of_time(out)) {
+    explain_jointly(points, *partial, frame, part_verify_options(), out, depth, true);
+  }
+}
+
+void Recognizer::search_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth, RegionVotes cast,
+                               std::optional<Region>* whole_searched) const {
   // Anything found inside a split cluster stands on less evidence than an isolated cluster, and is
   // checked more strictly.
   const VerifyOptions part_verify = part_verify_options();
@@ -437,34 +465,9 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
     if (z / static_cast<double>(points.size()) > options_.verify.max_depth_m) return;
   }
   const double size = bounding_box(points.points).diagonal();
-  // Point pair votes after the views' poses: everywhere (both), or in what a detection left (depth
-  // above 0: an object touching the one found).
-  const bool votes = pass == VotePass::as_source ? source == PoseSource::both || (source == PoseSource::touching && depth > 0)
-                                                 : pass == VotePass::only;
-  // What the region's poses leave to search apart (a kept pose's rest, a region grown from a part's
-  // seed) is searched with votes wherever the source casts them here: the first of two passes
-  // leaves out only the votes of the region itself and of its parts.
-  const bool rest_votes = votes || pass == VotePass::none;
+  const bool votes = cast.region;
+  const bool rest_votes = cast.rest;
   std::optional<Detection> partial;  // a pose that explains part of the region well (joint_min_cluster_explained)
-  if (pass == VotePass::only) {
-    // The views' poses were tried, whole and in parts: the whole region's votes alone (its views'
-    // poses counted as tried), and a pose that explains part of it, with what it leaves.
-    std::vector<Region> whole;
-    const std::size_t regions = out.regions;  // (counted once, in the first pass)
-    if (std::optional<Region> region = describe_region(points, frame, depth > 0 ? part_verify : options_.verify, out)) {
-      region->gives_seed = false;
-      region->tried = region->candidates.size();
-      whole.push_back(std::move(*region));
-    }
-    out.regions = regions;
-    if (std::optional<Detection> det = search(whole, frame, out, &partial, true)) {
-      det->from_split_cluster = depth > 0;
-      recognize_rest(points, std::move(*det), frame, out, depth);
-    } else if (partial && options_.split.enabled && !out_of_time(out)) {
-      explain_jointly(points, *partial, frame, part_verify, out, depth, true);
-    }
-    return;
-  }
   // A cluster whose first batch of poses fails goes on in one budget with its convex parts, if it
   // has any (SplitOptions::whole_with_parts).
   const bool every = options_.accept.keep_best || options_.match.max_hypotheses == 0;
@@ -490,6 +493,7 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
     if (whole_with_parts && !whole.empty() && whole[0].candidates.size() > first_batch) {
       whole[0].tried = first_batch;
     } else {
+      if (whole_searched && !whole.empty()) *whole_searched = std::move(whole[0]);
       whole.clear();
     }
   }

@@ -502,7 +502,7 @@ class Recognizer {
     bool gives_seed = true;
     // Its first `tried` candidates were refined already (a whole cluster's first batch, searched on
     // alone or with its parts; all of a region's views' poses, for its votes alone:
-    // MatchOptions::votes_after_parts): the search starts after them, within the same range for
+    // search_votes_alone): the search starts after them, within the same range for
     // challengers.
     std::size_t tried = 0;
     std::size_t point_count = 0;  // the region's points (the description keeps those with normals)
@@ -575,14 +575,24 @@ class Recognizer {
   // `best` turned half a turn about each of its axes; the best of the four is kept.
   void turn_if_better(const Region& region, Detection& best, const FrameAndPlanes& frame, Recognition& out) const;
   Detection detection_from(const Refined& h, const Region& region, const Candidate& c) const;
-  // Which poses a region's search may take from point pair votes: as MatchOptions::source says, none
-  // (the views' alone, whole and in parts), or only the votes, in the whole region (its views'
-  // poses and parts tried already: MatchOptions::votes_after_parts).
-  enum class VotePass { as_source, none, only };
   // A cluster, or what is left of one: recognized whole, else split into convex parts; once a part
   // is recognized, its object's points are taken away and the rest recognized again (depth + 1).
-  void recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth,
-                        VotePass pass = VotePass::as_source) const;
+  // With PoseSource touching, what a detection left is searched with the views' poses, whole and in
+  // parts, before any vote is cast (MatchOptions::votes_after_parts).
+  void recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth) const;
+  // Where a region's search casts point pair votes: in the region itself and its parts, and in
+  // what its poses leave to search apart (a kept pose's rest, a region grown from a part's seed).
+  struct RegionVotes {
+    bool region = false;
+    bool rest = false;
+  };
+  // recognize_region's search. `whole_searched`, if given: the whole region, when it was described
+  // and its poses failed and are not searched on with its parts (at depth above 0, always so).
+  void search_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth, RegionVotes cast,
+                     std::optional<Region>* whole_searched) const;
+  // The votes' poses alone in a whole region whose views' poses search_region tried (its refused
+  // poses kept), and what a detection or a kept pose there leaves.
+  void search_votes_alone(const PointCloud& points, Region whole, const FrameAndPlanes& frame, Recognition& out, int depth) const;
   // A piece of the frame no detection explains: a cluster no detection reaches, or a cluster of
   // what detections leave of one.
   struct Piece {
