@@ -435,12 +435,13 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
 }
 
 void Recognizer::search_votes_alone(const PointCloud& points, Region whole, const FrameAndPlanes& frame, Recognition& out, int depth) const {
-  // Its views' poses were tried: they count as tried, and the poses verification refused stay
-  // refused (a vote's pose refined onto one is not verified again). What the first pass kept to
-  // grow or to explain jointly was used there.
+  // Its views' poses were tried: they count as tried, and the poses refused there stay refused (a
+  // vote's pose refined to within MatchOptions::refused_rotation_deg and refused_translation_m of
+  // one is not verified again). The pose it kept as explaining part of the region was offered to
+  // explain_jointly there: the votes' search starts without one, as on a region described afresh.
+  // (It keeps no seed: a whole region gives none.)
   whole.tried = whole.candidates.size();
   whole.best_partial.reset();
-  whole.best_seed.reset();
   std::vector<Region> regions;
   regions.push_back(std::move(whole));
   std::optional<Detection> partial;  // a pose that explains part of the region well

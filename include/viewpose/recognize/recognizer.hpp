@@ -497,7 +497,7 @@ class Recognizer {
     VerifyOptions seed;  // verify without the model's support bound (SplitOptions::grow_reach_m)
     // The best pose that passed `seed` and was not accepted (its cluster_points: point_count).
     mutable std::optional<Detection> best_seed;
-    // false: a whole cluster in recognize_region, whose search may go on with its parts (only
+    // false: a whole cluster in search_region, whose search may go on with its parts (only
     // parts are grown: SplitOptions::grow_reach_m). (Other regions are searched without a seed.)
     bool gives_seed = true;
     // Its first `tried` candidates were refined already (a whole cluster's first batch, searched on
@@ -578,7 +578,9 @@ class Recognizer {
   // A cluster, or what is left of one: recognized whole, else split into convex parts; once a part
   // is recognized, its object's points are taken away and the rest recognized again (depth + 1).
   // With PoseSource touching, what a detection left is searched with the views' poses, whole and in
-  // parts, before any vote is cast (MatchOptions::votes_after_parts).
+  // parts, before any vote is cast in it (MatchOptions::votes_after_parts; votes are cast meanwhile
+  // in what a pose kept there leaves and in a region grown from a part's seed, and one too wide to
+  // be searched whole has its votes in its parts, after each part's views).
   void recognize_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth) const;
   // Where a region's search casts point pair votes: in the region itself and its parts, and in
   // what its poses leave to search apart (a kept pose's rest, a region grown from a part's seed).
