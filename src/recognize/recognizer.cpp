@@ -419,19 +419,20 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
   // Point pair votes after the views' poses: everywhere (both), or in what a detection left (depth
   // above 0: an object touching the one found).
   const bool votes = source == PoseSource::both || (source == PoseSource::touching && depth > 0);
+  const double size = bounding_box(points.points).diagonal();
   if (source == PoseSource::touching && depth > 0 && options_.match.votes_after_parts &&
-      bounding_box(points.points).diagonal() <= options_.match.max_region_size_factor * largest_diameter_m_) {
+      size <= options_.match.max_region_size_factor * largest_diameter_m_) {
     // What a detection left: the views' poses, whole and in parts; where nothing passes, votes in
     // the whole of it, described once. (One too wide to be searched whole has votes in its parts,
     // below.) What the views' poses leave to search apart (a kept pose's rest, a region grown from
     // a part's seed) is searched with votes, as without the option.
     const std::size_t before = out.detections.size();
     std::optional<Region> whole;
-    search_region(points, frame, out, depth, {.region = false, .rest = true}, &whole);
+    search_region(points, size, frame, out, depth, {.region = false, .rest = true}, &whole);
     if (out.detections.size() == before && whole && !out_of_time(out)) search_votes_alone(points, std::move(*whole), frame, out, depth);
     return;
   }
-  search_region(points, frame, out, depth, {.region = votes, .rest = votes}, nullptr);
+  search_region(points, size, frame, out, depth, {.region = votes, .rest = votes}, nullptr);
 }
 
 void Recognizer::search_votes_alone(const PointCloud& points, Region whole, const FrameAndPlanes& frame, Recognition& out, int depth) const {
@@ -453,8 +454,8 @@ void Recognizer::search_votes_alone(const PointCloud& points, Region whole, cons
   }
 }
 
-void Recognizer::search_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth, RegionVotes cast,
-                               std::optional<Region>* whole_searched) const {
+void Recognizer::search_region(const PointCloud& points, double size, const FrameAndPlanes& frame, Recognition& out, int depth,
+                               RegionVotes cast, std::optional<Region>* whole_searched) const {
   // Anything found inside a split cluster stands on less evidence than an isolated cluster, and is
   // checked more strictly.
   const VerifyOptions part_verify = part_verify_options();
@@ -465,7 +466,6 @@ void Recognizer::search_region(const PointCloud& points, const FrameAndPlanes& f
     for (const auto& p : points.points) z += p.z();
     if (z / static_cast<double>(points.size()) > options_.verify.max_depth_m) return;
   }
-  const double size = bounding_box(points.points).diagonal();
   const bool votes = cast.region;
   const bool rest_votes = cast.rest;
   std::optional<Detection> partial;  // a pose that explains part of the region well (joint_min_cluster_explained)

@@ -588,10 +588,11 @@ class Recognizer {
     bool region = false;
     bool rest = false;
   };
-  // recognize_region's search. `whole_searched`, if given: the whole region, when it was described
-  // and its poses failed and are not searched on with its parts (at depth above 0, always so).
-  void search_region(const PointCloud& points, const FrameAndPlanes& frame, Recognition& out, int depth, RegionVotes cast,
-                     std::optional<Region>* whole_searched) const;
+  // recognize_region's search; `size`: the diagonal of the points' bounding box. `whole_searched`,
+  // if given: the whole region, when it was described and its poses failed and are not searched
+  // on with its parts (at depth above 0, always so).
+  void search_region(const PointCloud& points, double size, const FrameAndPlanes& frame, Recognition& out, int depth,
+                     RegionVotes cast, std::optional<Region>* whole_searched) const;
   // The votes' poses alone in a whole region whose views' poses search_region tried (its refused
   // poses kept), and what a detection or a kept pose there leaves.
   void search_votes_alone(const PointCloud& points, Region whole, const FrameAndPlanes& frame, Recognition& out, int depth) const;
