@@ -171,6 +171,8 @@ PYBIND11_MODULE(viewpose, m) {
       .def_readonly("repeats", &Recognition::repeats)
       .def_readonly("screened", &Recognition::screened)
       .def_readonly("screened_out", &Recognition::screened_out)
+      .def_readonly("screened_merged", &Recognition::screened_merged,
+                    "Screened poses led where another of their region's was led and refined, not refined again")
       .def_readonly("regions", &Recognition::regions)
       .def_readonly("parts_unreached", &Recognition::parts_unreached,
                     "Convex parts of split clusters the search never reached (a pose found, the budget spent or the deadline passed first): not described")

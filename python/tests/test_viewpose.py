@@ -83,8 +83,8 @@ def test_the_counters_are_the_jsons(scene):
     png, _ = scene["frames"][0]
     r = rec.recognize(viewpose.read_depth_png(png), K=scene["K"], depth_scale=scene["scale"])
     j = json.loads(r.to_json(with_times=False))
-    counters = ("clusters", "hypotheses", "repeats", "screened", "screened_out", "regions", "parts_unreached", "split_clusters",
-                "joined_regions", "grown_regions", "voted_regions", "dropped_as_explained", "dropped_inside_planes",
+    counters = ("clusters", "hypotheses", "repeats", "screened", "screened_out", "screened_merged", "regions", "parts_unreached",
+                "split_clusters", "joined_regions", "grown_regions", "voted_regions", "dropped_as_explained", "dropped_inside_planes",
                 "lifted_out_of_planes")
     for name in counters:
         assert getattr(r, name) == j[name], name
@@ -116,7 +116,8 @@ def test_a_budget_of_starting_poses_is_an_option(scene):
     assert len(unscreened) == 1 and unscreened.screened == 0
     screened = viewpose.Recognizer(db, budget=8, screen=16).recognize(depth, K=scene["K"])
     assert len(screened) == 1 and screened.screened <= 16 * screened.regions
-    assert 0 <= screened.screened_out <= screened.screened and unscreened.screened_out == 0
+    assert screened.screened_out + screened.screened_merged <= screened.screened
+    assert unscreened.screened_out == unscreened.screened_merged == 0
     with pytest.raises(TypeError):
         viewpose.Recognizer(db, budget=-1)
     with pytest.raises(TypeError):

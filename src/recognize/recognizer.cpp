@@ -174,6 +174,13 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
   screen_icp_.max_iterations_per_stage = options_.match.prescreen_iterations;
   screen_icp_.max_source_points = options_.match.prescreen_points;
   screen_icp_.min_fitness_after_first_stage = 0;
+  // What the screen led is refined from the second stage on (a one-stage schedule: all of it).
+  after_screen_icp_ = options_.icp;
+  if (after_screen_icp_.max_correspondence_m.size() > 1) after_screen_icp_.max_correspondence_m.erase(after_screen_icp_.max_correspondence_m.begin());
+  if (!(options_.match.merge_rotation_deg >= 0 && options_.match.merge_share >= 0)) {
+    throw Error(fmt::format("recognize: screened poses are merged within {} degrees and {} of the diameter: neither may be negative",
+                            options_.match.merge_rotation_deg, options_.match.merge_share));
+  }
 }
 
 Recognizer::~Recognizer() = default;
@@ -374,6 +381,7 @@ void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   out.repeats += part.repeats;
   out.screened += part.screened;
   out.screened_out += part.screened_out;
+  out.screened_merged += part.screened_merged;
   out.split_clusters += part.split_clusters;
   out.regions += part.regions;
   out.parts_unreached += part.parts_unreached;
@@ -784,7 +792,8 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const H
     Refined& h = out[static_cast<std::size_t>(k)];
     const Hypothesis& hypothesis = hypotheses[static_cast<std::size_t>(k)];
     auto t = Clock::now();
-    h.icp = icp_point_to_plane(icp_source, icp_target(hypothesis.object), hypothesis.T_camera_object.inverse(), options_.icp);
+    const IcpOptions& schedule = hypothesis.screened ? after_screen_icp_ : options_.icp;
+    h.icp = icp_point_to_plane(icp_source, icp_target(hypothesis.object), hypothesis.T_camera_object.inverse(), schedule);
     h.icp_ms = ms_since(t);
     h.T_camera_object = h.icp.T_target_source.inverse();
     if (h.icp.fitness < options_.icp.min_fitness_after_first_stage) return;  // ICP lost the object
@@ -832,6 +841,7 @@ std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& 
   region.description = describe(points, db_.params.describe, &dt);
   region.verify = region.near_miss = verify;
   region.refused.resize(db_.objects.size());
+  region.refined_places.resize(db_.objects.size());
   out.times.normals_ms += dt.normals_ms;
   out.times.vfh_ms += dt.vfh_ms;
   out.times.crh_ms += dt.crh_ms;
@@ -921,9 +931,24 @@ bool Recognizer::refused_after_screen(const Region& region, const Candidate& c, 
   // (The measurement that makes this safe: MatchOptions::prescreen.)
   if (!c.screened()) return false;
   const Transform& T_camera_object = region.screened_poses[c.screened_pose];
-  if (!seen_through_quickly(verify_model(c.object), T_camera_object, frame.depth, frame.K, region.verify)) return false;
-  ++out.screened_out;
-  return true;
+  if (seen_through_quickly(verify_model(c.object), T_camera_object, frame.depth, frame.K, region.verify)) {
+    ++out.screened_out;
+    return true;
+  }
+  std::vector<Transform>& places = region.refined_places[c.object];
+  if (options_.match.merge_rotation_deg > 0) {
+    const double reach = options_.match.merge_share * db_.objects[c.object].diameter_m;
+    const bool merged = std::any_of(places.begin(), places.end(), [&](const Transform& U) {
+      return (T_camera_object.translation() - U.translation()).norm() <= reach &&
+             rotation_difference_deg(T_camera_object.linear(), U.linear()) <= options_.match.merge_rotation_deg;
+    });
+    if (merged) {
+      ++out.screened_merged;
+      return true;
+    }
+  }
+  places.push_back(T_camera_object);
+  return false;
 }
 
 std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& region, Recognition& out) const {
@@ -1027,7 +1052,11 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
                                                     bool take_best, const FrameAndPlanes& frame, Recognition& out) const {
   std::optional<Detection> found;
   std::vector<Hypothesis> hypotheses;
-  for (const std::size_t i : which) hypotheses.push_back({region.candidates[i].object, region.candidates[i].T_camera_object});
+  for (const std::size_t i : which) {
+    // A screened pose from where the screen led it (MatchOptions::prescreen).
+    const Candidate& c = region.candidates[i];
+    hypotheses.push_back(c.screened() ? Hypothesis{c.object, region.screened_poses[c.screened_pose], true} : Hypothesis{c.object, c.T_camera_object});
+  }
   // All at once on the threads there are; then taken in order, as one after the other would.
   const Description& d = region.description;
   const std::vector<Refined> refined =

@@ -115,6 +115,14 @@ TEST(Recognize, OptionsAreGivenByStageAndTheDatabaseFixesTheVoxelSize) {
     bad.split.grow_reach_m = reach;
     EXPECT_THROW(Recognizer(jug_db(), bad), Error) << reach;
   }
+  // Screened poses merged within a negative or NaN rotation or share (NaN would merge none unsaid).
+  for (const double bound : {-1.0, std::nan("")}) {
+    RecognizerOptions bad_rotation, bad_share;
+    bad_rotation.match.merge_rotation_deg = bound;
+    bad_share.match.merge_share = bound;
+    EXPECT_THROW(Recognizer(jug_db(), bad_rotation), Error) << bound;
+    EXPECT_THROW(Recognizer(jug_db(), bad_share), Error) << bound;
+  }
 }
 
 TEST(Recognize, ADeadlineCutsTheFrameShortAndSaysSo) {
@@ -175,6 +183,7 @@ void expect_same_recognition(const Recognition& a, const Recognition& b) {
   EXPECT_EQ(a.hypotheses, b.hypotheses);
   EXPECT_EQ(a.screened, b.screened);
   EXPECT_EQ(a.screened_out, b.screened_out);
+  EXPECT_EQ(a.screened_merged, b.screened_merged);
   EXPECT_EQ(a.split_clusters, b.split_clusters);
   EXPECT_EQ(a.dropped_as_explained, b.dropped_as_explained);
   EXPECT_EQ(a.dropped_inside_planes, b.dropped_inside_planes);
@@ -499,7 +508,7 @@ TEST(Recognize, TheShortIcpScreenFindsWhatCoarseFitOrderMissesWithinTheBudget) {
       EXPECT_EQ(b.screened, 0u);
       EXPECT_EQ(b.screened_out, 0u);
       EXPECT_EQ(c.screened_out, 0u);
-      EXPECT_LE(a.screened_out, a.screened);
+      EXPECT_LE(a.screened_out + a.screened_merged, a.screened);
     }
   EXPECT_GT(poses_screened, 0u);
   // The poses the quick test refuses where the screen led them would not have passed: the same
@@ -521,10 +530,13 @@ TEST(Recognize, PosesRefinedOntoOnesAlreadyRefusedAreNotVerifiedAgain) {
   // (Verification's quick test off: where the screen led them, it refuses most of these poses
   // before they are refined at all. Each cluster searched alone with its whole budget and then in
   // its parts with another, SplitOptions::whole_with_parts off: with one budget for both, as few as
-  // 32 poses are refined, and built with clang none of them repeated another.)
+  // 32 poses are refined, and built with clang none of them repeated another. Screened poses led
+  // to one place are not merged, MatchOptions::merge_rotation_deg 0: merged, most of these poses
+  // are never refined.)
   const Frame frame = frame_from_depth(can_and_mug_frame().depth, K);
   RecognizerOptions skip, every;
   skip.verify.quick_max_seen_through = every.verify.quick_max_seen_through = 1;
+  skip.match.merge_rotation_deg = every.match.merge_rotation_deg = 0;
   skip.split.whole_with_parts = every.split.whole_with_parts = false;
   every.match.refused_rotation_deg = 0;
   const Recognition skipping = Recognizer(jug_db(), skip).recognize(frame), verifying = Recognizer(jug_db(), every).recognize(frame);
@@ -776,9 +788,9 @@ TEST(Recognize, AClusterWhoseFirstBatchFailsGoesOnWithItsPartsInOneBudget) {
   ASSERT_EQ(t.clusters, 1u);
   EXPECT_EQ(t.split_clusters, 1u);
   EXPECT_EQ(a.split_clusters, 1u);
-  // The budget spent: poses refined, and poses the screen refused where it led them (each spends
-  // its share unrefined). Each batch may add the three half turns of a pose that nearly passed.
-  const auto spent = [](const Recognition& r) { return r.hypotheses + r.screened_out; };
+  // The budget spent: poses refined, and poses the screen refused or merged where it led them (each
+  // spends its share unrefined). Each batch may add the three half turns of a pose that nearly passed.
+  const auto spent = [](const Recognition& r) { return r.hypotheses + r.screened_out + r.screened_merged; };
   const std::size_t budget = together.match.max_hypotheses, batch = together.run.batch;
   const std::size_t batches = 1 + (budget + batch - 1) / batch;
   EXPECT_GE(spent(t), batch + budget) << "its first batch, then one budget with its parts";
@@ -790,6 +802,53 @@ TEST(Recognize, AClusterWhoseFirstBatchFailsGoesOnWithItsPartsInOneBudget) {
   // each region tries a batch, one place is theirs, and one part fewer is reached than when the
   // parts had a budget of their own.
   EXPECT_EQ(t.parts_unreached, a.parts_unreached + 1);
+}
+
+TEST(Recognize, APlaceTheScreenLedManyPosesToIsRefinedOnce) {
+  // Many starting poses of a region lead to one place (MatchOptions::merge_rotation_deg). Where
+  // nothing is known (the five cans against the jug), each place is refined once: fewer poses
+  // refined than with merging off, each merged one counted and spending its share of the budget.
+  // Where objects are found, the same are found at the same poses.
+  const ViewDatabase& db = jug_db();
+  RecognizerOptions merged, apart;
+  apart.match.merge_rotation_deg = 0;
+  ASSERT_GT(merged.match.merge_rotation_deg, 0) << "the default";
+  const Recognizer with(db, merged), without(db, apart);
+  const Frame cans = frame_from_depth(five_cans_in_a_row().depth, K);
+  const Recognition m = with.recognize(cans), a = without.recognize(cans);
+  EXPECT_TRUE(m.detections.empty());
+  EXPECT_TRUE(a.detections.empty());
+  EXPECT_GT(m.screened_merged, 0u);
+  EXPECT_EQ(a.screened_merged, 0u);
+  EXPECT_LE(m.screened_out + m.screened_merged, m.screened);
+  EXPECT_LT(m.hypotheses, a.hypotheses);
+  // The same budget spent either way, to within the half turns a batch may add (three each).
+  const auto spent = [](const Recognition& r) { return r.hypotheses + r.screened_out + r.screened_merged; };
+  const std::size_t batches = 2 * (1 + (merged.match.max_hypotheses + merged.run.batch - 1) / merged.run.batch);
+  EXPECT_LE(spent(m), spent(a) + 3 * batches);
+  EXPECT_GE(spent(m) + 3 * batches, spent(a));
+  std::printf("five cans: %zu poses refined, %zu merged; %zu refined with merging off\n", m.hypotheses, m.screened_merged, a.hypotheses);
+  // Rooms (the jug and the box among furniture, ICP screened in most regions): the same objects at
+  // the same poses.
+  const Recognizer room_with(room_db(), merged), room_without(room_db(), apart);
+  std::size_t found = 0, merged_in_rooms = 0, frames = 0;
+  for (const Frame& frame : room_frames()) {
+    SCOPED_TRACE(frames++);
+    const Recognition mr = room_with.recognize(frame), ar = room_without.recognize(frame);
+    merged_in_rooms += mr.screened_merged;
+    ASSERT_EQ(mr.detections.size(), ar.detections.size());
+    for (std::size_t i = 0; i < mr.detections.size(); ++i) {
+      const Transform& T = mr.detections[i].T_camera_object;
+      const Transform& U = ar.detections[i].T_camera_object;
+      EXPECT_EQ(mr.detections[i].object_id, ar.detections[i].object_id);
+      EXPECT_LT((T.translation() - U.translation()).norm(), 0.002);
+      EXPECT_LT(rotation_difference_deg(T.linear(), U.linear()), 2.0);
+    }
+    found += mr.detections.size();
+  }
+  EXPECT_GT(found, 0u);
+  EXPECT_GT(merged_in_rooms, 0u);
+  std::printf("rooms: %zu found, %zu poses merged\n", found, merged_in_rooms);
 }
 
 TEST(Recognize, APoseThatPassesInTheFirstBatchIsStillChallengedByTheOtherObjects) {
@@ -815,7 +874,7 @@ TEST(Recognize, APoseThatPassesInTheFirstBatchIsStillChallengedByTheOtherObjects
     ASSERT_EQ(c.detections.size(), 1u) << "image " << image;
     ASSERT_EQ(u.detections.size(), 1u) << "image " << image;
     EXPECT_EQ(c.detections[0].object_id, 1) << "image " << image;
-    EXPECT_GT(c.hypotheses + c.screened_out, u.hypotheses + u.screened_out) << "image " << image;
+    EXPECT_GT(c.hypotheses + c.screened_out + c.screened_merged, u.hypotheses + u.screened_out + u.screened_merged) << "image " << image;
   }
 }
 
