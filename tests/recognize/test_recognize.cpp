@@ -1118,6 +1118,15 @@ const BopImage* find_image(const BopDataset& ds, int scene_id, int im_id) {
   return image == ds.images.end() ? nullptr : &*image;
 }
 
+// An image of the dataset (its truth, for right_detections) and its frame, from its depth and
+// intrinsics; throws where the dataset has no such image.
+std::pair<BopImage, Frame> ycbv_dev_frame(const BopDataset& ds, int scene_id, int im_id) {
+  const BopImage* image = find_image(ds, scene_id, im_id);
+  if (!image) throw std::runtime_error(fmt::format("no image {} in scene {}", im_id, scene_id));
+  const BopFrame bf = load_bop_frame(*image);
+  return {*image, frame_from_depth(bf.depth, bf.K)};
+}
+
 // Each object found within ADD-S of a tenth of its diameter from its truth in `image`, with that
 // error; any other detection fails the test (a false positive).
 std::map<int, double> right_detections(const Recognition& r, const ViewDatabase& db, const BopImage& image) {
@@ -1153,9 +1162,7 @@ TEST(RealData, ACanStandingOnABoxAndTheBoxAreFoundTogetherFromPointPairVotes) {
   const auto dir = test::shared_data() / "ycbv_real_dev";
   const BopDataset ds = open_bop_dataset(dir, "test", {"models"});
   const ViewDatabase db = ycbv_dev_database(ds, {1, 3, 9, 11});
-  const BopImage* image = find_image(ds, 14, 2);
-  ASSERT_NE(image, nullptr);
-  const BopFrame bf = load_bop_frame(*image);
+  const auto [image, frame] = ycbv_dev_frame(ds, 14, 2);
   // Votes everywhere nothing else passes (both), or only in what a detection leaves (touching: the
   // box and the can are what the pitcher and the master chef can left of their regions); touching
   // again as `recognize` of one file runs it, the pair tables left in the file until the first vote.
@@ -1167,8 +1174,8 @@ TEST(RealData, ACanStandingOnABoxAndTheBoxAreFoundTogetherFromPointPairVotes) {
                                          std::pair{PoseSource::touching, &tables_on_disk}}) {
     RecognizerOptions options;
     options.match.source = source;
-    const Recognition r = Recognizer(*database, options).recognize(frame_from_depth(bf.depth, bf.K));
-    EXPECT_EQ(ids_of(right_detections(r, db, *image)), (std::set<int>{1, 3, 9, 11})) << (source == PoseSource::both ? "both" : "touching")
+    const Recognition r = Recognizer(*database, options).recognize(frame);
+    EXPECT_EQ(ids_of(right_detections(r, db, image)), (std::set<int>{1, 3, 9, 11})) << (source == PoseSource::both ? "both" : "touching")
                                                     << (database == &tables_on_disk ? ", tables read at the first vote" : "");
     // (With touching, after the views' poses of the region's parts: MatchOptions::votes_after_parts.)
     EXPECT_GT(r.voted_regions, 0u);
@@ -1188,15 +1195,13 @@ TEST(RealData, AMugSeenInTwoPiecesIsFoundWhenThePiecesAreSearchedTogether) {
   const auto dir = test::shared_data() / "ycbv_real_dev";
   const BopDataset ds = open_bop_dataset(dir, "test", {"models"});
   const ViewDatabase db = ycbv_dev_database(ds, {1, 3, 8, 9, 11, 14, 21});  // the dataset's seven
-  const BopImage* image = find_image(ds, 0, 5);
-  ASSERT_NE(image, nullptr);
-  const BopFrame bf = load_bop_frame(*image);
+  const auto [image, frame] = ycbv_dev_frame(ds, 0, 5);
   for (const float join_gap_m : {SplitOptions{}.join_gap_m, 0.0f}) {
     SCOPED_TRACE(join_gap_m > 0 ? "pieces joined" : "no join");
     RecognizerOptions options;
     options.split.join_gap_m = join_gap_m;
-    const Recognition r = Recognizer(db, options).recognize(frame_from_depth(bf.depth, bf.K));
-    const std::map<int, double> found = right_detections(r, db, *image);
+    const Recognition r = Recognizer(db, options).recognize(frame);
+    const std::map<int, double> found = right_detections(r, db, image);
     EXPECT_EQ(found.count(14), join_gap_m > 0 ? 1u : 0u);
     if (found.count(14)) {
       EXPECT_LT(found.at(14), 0.005) << "the mug's ADD-S error";
@@ -1222,16 +1227,13 @@ TEST(RealData, AMugAgainstObjectsNotInTheDatabaseIsGrownFromItsPart) {
   // In frame 3 the wall's pose fails the support; in frame 6 it passes it narrowly (half the model
   // on the part) with a confidence of 0.72, below the bound.
   for (const int im_id : {3, 6}) {
-    const BopImage* image = find_image(ds, 0, im_id);
-    ASSERT_NE(image, nullptr);
-    const BopFrame bf = load_bop_frame(*image);
-    const Frame frame = frame_from_depth(bf.depth, bf.K);
+    const auto [image, frame] = ycbv_dev_frame(ds, 0, im_id);
     for (const float grow_reach_m : {SplitOptions{}.grow_reach_m, 0.0f}) {
       SCOPED_TRACE(fmt::format("frame {}, grown within {} m", im_id, grow_reach_m));
       RecognizerOptions options;
       options.split.grow_reach_m = grow_reach_m;
       const Recognition r = Recognizer(db, options).recognize(frame);
-      const std::map<int, double> found = right_detections(r, db, *image);
+      const std::map<int, double> found = right_detections(r, db, image);
       EXPECT_EQ(r.detections.size(), found.size()) << "a detection that is not the mug";
       EXPECT_EQ(found.count(14), grow_reach_m > 0 ? 1u : 0u);
       EXPECT_EQ(r.grown_regions > 0, grow_reach_m > 0);
@@ -1255,11 +1257,9 @@ TEST(RealData, AMugGrownFromAPartOfAClusterThatWentOnWithItsPartsIsMarkedAsFromA
   VIEWPOSE_REQUIRE_SHARED_DATA();
   const BopDataset ds = open_bop_dataset(test::shared_data() / "ycbv_real_dev", "test", {"models"});
   const ViewDatabase db = ycbv_dev_database(ds, {1, 14});
-  const BopImage* image = find_image(ds, 0, 3);
-  ASSERT_NE(image, nullptr);
-  const BopFrame bf = load_bop_frame(*image);
-  const Recognition r = Recognizer(db).recognize(frame_from_depth(bf.depth, bf.K));
-  EXPECT_EQ(ids_of(right_detections(r, db, *image)), std::set<int>{14});
+  const auto [image, frame] = ycbv_dev_frame(ds, 0, 3);
+  const Recognition r = Recognizer(db).recognize(frame);
+  EXPECT_EQ(ids_of(right_detections(r, db, image)), std::set<int>{14});
   ASSERT_EQ(r.detections.size(), 1u) << "a detection that is not the mug";
   EXPECT_GT(r.grown_regions, 0u);
   EXPECT_GT(r.split_clusters, 0u);
@@ -1281,17 +1281,14 @@ TEST(RealData, WhatADetectionLeavesIsSplitIntoPartsBeforeAnyVoteIsCast) {
   const BopDataset ds = open_bop_dataset(test::shared_data() / "ycbv_real_dev", "test", {"models"});
   const ViewDatabase db = ycbv_dev_database(ds, {1, 3, 8, 9, 11, 14, 21});
   for (const int im_id : {4, 6}) {
-    const BopImage* image = find_image(ds, 0, im_id);
-    ASSERT_NE(image, nullptr);
-    const BopFrame bf = load_bop_frame(*image);
-    const Frame frame = frame_from_depth(bf.depth, bf.K);
+    const auto [image, frame] = ycbv_dev_frame(ds, 0, im_id);
     for (const bool after_parts : {true, false}) {
       SCOPED_TRACE(fmt::format("frame {}, votes after the parts: {}", im_id, after_parts));
       RecognizerOptions options;
       ASSERT_EQ(options.match.source, PoseSource::touching);
       options.match.votes_after_parts = after_parts;
       const Recognition r = Recognizer(db, options).recognize(frame);
-      EXPECT_EQ(ids_of(right_detections(r, db, *image)), (std::set<int>{8, 14, 21}));
+      EXPECT_EQ(ids_of(right_detections(r, db, image)), (std::set<int>{8, 14, 21}));
       EXPECT_EQ(r.detections.size(), 3u);
       EXPECT_EQ(r.voted_regions > 0, !after_parts);
     }
@@ -1311,14 +1308,11 @@ TEST(RealData, ARestTooWideToBeSearchedWholeCastsItsVotesInItsParts) {
   VIEWPOSE_REQUIRE_SHARED_DATA();
   const BopDataset ds = open_bop_dataset(test::shared_data() / "ycbv_real_dev", "test", {"models"});
   const ViewDatabase db = ycbv_dev_database(ds, {9, 21});
-  const BopImage* image = find_image(ds, 0, 5);
-  ASSERT_NE(image, nullptr);
-  const BopFrame bf = load_bop_frame(*image);
-  const Frame frame = frame_from_depth(bf.depth, bf.K);
+  const auto [image, frame] = ycbv_dev_frame(ds, 0, 5);
   RecognizerOptions options;
   ASSERT_TRUE(options.match.votes_after_parts);
   const Recognition r = Recognizer(db, options).recognize(frame);
-  EXPECT_EQ(ids_of(right_detections(r, db, *image)), (std::set<int>{21}));
+  EXPECT_EQ(ids_of(right_detections(r, db, image)), (std::set<int>{21}));
   EXPECT_GT(r.voted_regions, 0u);
   options.match.votes_after_parts = false;
   const Recognition without = Recognizer(db, options).recognize(frame);
@@ -1342,11 +1336,9 @@ TEST(RealData, APileOfThreeSmallObjectsIsSplitWhenOnlyTheyAreInTheDatabase) {
   const Recognizer recognizer(db);
   for (const int im_id : {4, 6}) {  // two of the frames the old bound lost
     SCOPED_TRACE(fmt::format("frame {}", im_id));
-    const BopImage* image = find_image(ds, 0, im_id);
-    ASSERT_NE(image, nullptr);
-    const BopFrame bf = load_bop_frame(*image);
-    const Recognition r = recognizer.recognize(frame_from_depth(bf.depth, bf.K));
-    EXPECT_EQ(ids_of(right_detections(r, db, *image)), (std::set<int>{8, 14, 21}));
+    const auto [image, frame] = ycbv_dev_frame(ds, 0, im_id);
+    const Recognition r = recognizer.recognize(frame);
+    EXPECT_EQ(ids_of(right_detections(r, db, image)), (std::set<int>{8, 14, 21}));
   }
 }
 
@@ -1362,13 +1354,10 @@ TEST(RealData, APoseWhoseHiddenPartLiesInsideTheTableIsDropped) {
   VIEWPOSE_REQUIRE_SHARED_DATA();
   const BopDataset ds = open_bop_dataset(test::shared_data() / "ycbv_real_dev", "test", {"models"});
   const ViewDatabase db = ycbv_dev_database(ds, {11});
-  const BopImage* image = find_image(ds, 14, 2);
-  ASSERT_NE(image, nullptr);
-  const BopFrame bf = load_bop_frame(*image);
-  const Frame frame = frame_from_depth(bf.depth, bf.K);
+  const auto [image, frame] = ycbv_dev_frame(ds, 14, 2);
   const Recognition r = Recognizer(db).recognize(frame);
   EXPECT_EQ(r.detections.size(), 1u);
-  EXPECT_EQ(ids_of(right_detections(r, db, *image)), std::set<int>{11});
+  EXPECT_EQ(ids_of(right_detections(r, db, image)), std::set<int>{11});
   EXPECT_GE(r.dropped_inside_planes, 1u);
   // Without the rule the phantom stands (the test's reason to exist).
   RecognizerOptions keep_all;
@@ -1383,7 +1372,7 @@ TEST(RealData, APoseWhoseHiddenPartLiesInsideTheTableIsDropped) {
   RecognizerOptions votes_first;
   votes_first.match.votes_after_parts = false;
   const Recognition searched_on = Recognizer(db, votes_first).recognize(frame);
-  EXPECT_EQ(ids_of(right_detections(searched_on, db, *image)), std::set<int>{11});
+  EXPECT_EQ(ids_of(right_detections(searched_on, db, image)), std::set<int>{11});
   EXPECT_EQ(searched_on.detections.size(), 1u);
   EXPECT_GT(searched_on.dropped_inside_planes, 1u);
 }
