@@ -173,6 +173,7 @@ PYBIND11_MODULE(viewpose, m) {
       .def_readonly("screened_out", &Recognition::screened_out)
       .def_readonly("screened_merged", &Recognition::screened_merged,
                     "Screened poses led where another of their region's was led and refined, not refined again")
+      .def_readonly("icp_steps", &Recognition::icp_steps, "ICP steps of the poses refined in full (the screen's not counted)")
       .def_readonly("regions", &Recognition::regions)
       .def_readonly("parts_unreached", &Recognition::parts_unreached,
                     "Convex parts of split clusters the search never reached (a pose found, the budget spent or the deadline passed first): not described")

@@ -233,7 +233,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
     std::vector<Series> stages = {{"frame", {}}, {"downsample", {}}, {"segment", {}}, {"normals", {}}, {"vfh", {}},
                                   {"match", {}}, {"crh", {}},        {"icp", {}},     {"verify", {}},  {"split", {}},
                                   {"total", {}}};
-    std::vector<double> hypotheses, repeats, per_hypothesis_ms, match_per_region_ms;
+    std::vector<double> hypotheses, repeats, per_hypothesis_ms, steps_per_hypothesis, match_per_region_ms;
     std::size_t targets = 0, found = 0, found_add = 0, wrong = 0, cut_short = 0;
     std::vector<std::size_t> failed_frames;  // a pose missed or a wrong detection: worth looking at
     // With --distinct, --frames runs cycle through the frames made; without, each frame runs once.
@@ -271,6 +271,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
         repeats.push_back(static_cast<double>(r.repeats));
         cut_short += r.cut_short ? 1 : 0;
         if (r.hypotheses > 0) per_hypothesis_ms.push_back((t.icp_ms + t.verify_ms) / static_cast<double>(r.hypotheses));
+        if (r.hypotheses > 0) steps_per_hypothesis.push_back(static_cast<double>(r.icp_steps) / static_cast<double>(r.hypotheses));
         if (r.regions > 0) match_per_region_ms.push_back(t.match_ms / static_cast<double>(r.regions));
         // Right: a detection of the same object within ADD-S 10 % of its diameter; anything else is wrong.
         targets += frames[i].gt.size();
@@ -336,10 +337,11 @@ void add_bench_command(CLI::App& app, int& exit_code) {
                  " stages may add up to more than the frame's total, which is its wall time)\n");
     }
     const double hyp_med = percentile(hypotheses, 0.5), repeats_med = percentile(repeats, 0.5), per_hyp = percentile(per_hypothesis_ms, 0.5),
-                 match_per_region = percentile(match_per_region_ms, 0.5);
+                 steps_per_hyp = percentile(steps_per_hypothesis, 0.5), match_per_region = percentile(match_per_region_ms, 0.5);
     fmt::print("{:.1f} frames per second; {:.0f} hypotheses per frame (median; {:.0f} of them refined onto a pose already "
-               "refused, not verified again), ICP + verify {:.2f} ms per hypothesis, matching {:.2f} ms per cluster (medians)\n",
-               fps, hyp_med, repeats_med, per_hyp, match_per_region);
+               "refused, not verified again), ICP + verify {:.2f} ms and {:.1f} ICP steps per hypothesis, matching {:.2f} ms "
+               "per cluster (medians)\n",
+               fps, hyp_med, repeats_med, per_hyp, steps_per_hyp, match_per_region);
     if (!o->scenes.empty()) fmt::print("detections: {} in {} frames (no ground truth)\n", detections, runs);
     if (targets > 0) {
       fmt::print("poses right (ADD-S < 10 % of the diameter): {} of {} ({:.1f} %), the right way round too (ADD): {}; "
@@ -355,7 +357,7 @@ void add_bench_command(CLI::App& app, int& exit_code) {
       const nlohmann::json j = {{"source", source}, {"frames", runs}, {"distinct_frames", frames.size()}, {"blocks", blocks}, {"threads", thread_count()}, {"openmp_wait", openmp_wait()}, {"glibc_tunables", malloc_tunables()},
                                 {"objects", db.objects.size()}, {"views", db.views.size()},
                                 {"db_build_ms", db_build_ms}, {"db_load_ms", db_load_ms}, {"prepare_ms", prepare_ms}, {"load_processes", o->load}, {"detections", detections}, {"stages_ms", jstages}, {"fps", fps},
-                                {"hypotheses_median", hyp_med}, {"repeats_median", repeats_med}, {"icp_verify_per_hypothesis_ms", per_hyp}, {"match_per_cluster_ms", match_per_region},
+                                {"hypotheses_median", hyp_med}, {"repeats_median", repeats_med}, {"icp_verify_per_hypothesis_ms", per_hyp}, {"icp_steps_per_hypothesis", steps_per_hyp}, {"match_per_cluster_ms", match_per_region},
                                 {"targets", targets}, {"right", found}, {"right_add", found_add}, {"wrong", wrong}, {"failed_frames", failed_frames}, {"cut_short", cut_short},
                                 {"peak_rss_mib", rss}, {"total_ms", stages.back().ms}, {"hypotheses", hypotheses}};
       write_file_atomic(o->json, j.dump(2) + "\n");

@@ -67,7 +67,8 @@ struct RecognizeFlags {
     cmd.add_option("--screen", screen,
                    "Starting poses per cluster screened by a short ICP, which orders them for --budget by where they "
                    "lead (the first few are tried in coarse fit order before it; 0: coarse fit order only); one the camera "
-                   "sees past where it led is not refined, and spends its share of --budget")
+                   "sees past where it led, or that it led where it led one refined already, is not refined, and spends "
+                   "its share of --budget")
         ->check(CLI::Range(0, 1000000))
         ->capture_default_str();
     cmd.add_option("--source", source,

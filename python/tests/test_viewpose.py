@@ -85,10 +85,10 @@ def test_the_counters_are_the_jsons(scene):
     j = json.loads(r.to_json(with_times=False))
     counters = ("clusters", "hypotheses", "repeats", "screened", "screened_out", "screened_merged", "regions", "parts_unreached",
                 "split_clusters", "joined_regions", "grown_regions", "voted_regions", "dropped_as_explained", "dropped_inside_planes",
-                "lifted_out_of_planes")
+                "lifted_out_of_planes", "icp_steps")
     for name in counters:
         assert getattr(r, name) == j[name], name
-    assert r.clusters >= 1 and r.hypotheses >= 1
+    assert r.clusters >= 1 and r.hypotheses >= 1 and r.icp_steps >= r.hypotheses
 
 
 def test_metres_as_float_give_the_same_as_millimetres_with_a_scale(scene):

@@ -36,7 +36,7 @@ nlohmann::json recognition_json(const Recognition& r, bool with_times) {
                     {"verification", verification_json(d.verification)}});
   }
   nlohmann::json j = {{"detections", dets}, {"cut_short", r.cut_short}, {"clusters", r.clusters},
-                      {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"parts_unreached", r.parts_unreached}, {"hypotheses", r.hypotheses}, {"repeats", r.repeats}, {"screened", r.screened}, {"screened_out", r.screened_out}, {"screened_merged", r.screened_merged},
+                      {"split_clusters", r.split_clusters}, {"regions", r.regions}, {"parts_unreached", r.parts_unreached}, {"hypotheses", r.hypotheses}, {"repeats", r.repeats}, {"screened", r.screened}, {"screened_out", r.screened_out}, {"screened_merged", r.screened_merged}, {"icp_steps", r.icp_steps},
                       {"dropped_as_explained", r.dropped_as_explained}, {"dropped_inside_planes", r.dropped_inside_planes},
                       {"lifted_out_of_planes", r.lifted_out_of_planes},
                       {"joined_regions", r.joined_regions}, {"grown_regions", r.grown_regions},

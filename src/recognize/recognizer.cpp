@@ -137,6 +137,10 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
   if (!(options_.split.grow_reach_m >= 0 && options_.split.grow_reach_m <= 1)) {
     throw Error(fmt::format("recognize: a part's pose is grown {} m around its model, not within 0-1 m", options_.split.grow_reach_m));
   }
+  if (!(options_.match.merge_rotation_deg >= 0 && options_.match.merge_share >= 0)) {
+    throw Error(fmt::format("recognize: screened poses are merged within {} degrees and {} of the diameter: neither may be negative or NaN",
+                            options_.match.merge_rotation_deg, options_.match.merge_share));
+  }
   if (!(options_.accept.max_share_inside_planes >= 0 && options_.accept.max_share_inside_planes <= 1)) {
     throw Error(fmt::format("recognize: the share of a model allowed inside a plane is {}, not within 0-1", options_.accept.max_share_inside_planes));
   }
@@ -174,13 +178,9 @@ Recognizer::Recognizer(std::shared_ptr<const ViewDatabase> shared, RecognizerOpt
   screen_icp_.max_iterations_per_stage = options_.match.prescreen_iterations;
   screen_icp_.max_source_points = options_.match.prescreen_points;
   screen_icp_.min_fitness_after_first_stage = 0;
-  // What the screen led is refined from the second stage on (a one-stage schedule: all of it).
+  // What the screen led is refined without the first stage (a one-stage schedule: all of it).
   after_screen_icp_ = options_.icp;
   if (after_screen_icp_.max_correspondence_m.size() > 1) after_screen_icp_.max_correspondence_m.erase(after_screen_icp_.max_correspondence_m.begin());
-  if (!(options_.match.merge_rotation_deg >= 0 && options_.match.merge_share >= 0)) {
-    throw Error(fmt::format("recognize: screened poses are merged within {} degrees and {} of the diameter: neither may be negative",
-                            options_.match.merge_rotation_deg, options_.match.merge_share));
-  }
 }
 
 Recognizer::~Recognizer() = default;
@@ -382,6 +382,7 @@ void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   out.screened += part.screened;
   out.screened_out += part.screened_out;
   out.screened_merged += part.screened_merged;
+  out.icp_steps += part.icp_steps;
   out.split_clusters += part.split_clusters;
   out.regions += part.regions;
   out.parts_unreached += part.parts_unreached;
@@ -446,7 +447,8 @@ void Recognizer::recognize_region(const PointCloud& points, const FrameAndPlanes
 void Recognizer::search_votes_alone(const PointCloud& points, Region whole, const FrameAndPlanes& frame, Recognition& out, int depth) const {
   // Its views' poses were tried: they count as tried, and the poses refused there stay refused (a
   // vote's pose refined to within MatchOptions::refused_rotation_deg and refused_translation_m of
-  // one is not verified again). The pose it kept as explaining part of the region was offered to
+  // one is not verified again), as do the places its screened poses were refined from (a vote's
+  // pose the screen leads to one is not refined: MatchOptions::merge_rotation_deg). The pose it kept as explaining part of the region was offered to
   // explain_jointly there: the votes' search starts without one, as on a region described afresh.
   // (It keeps no seed: a whole region gives none.)
   whole.tried = whole.candidates.size();
@@ -809,6 +811,7 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const H
   // Taken in order: the confidence of each pose verification passed, and what the caller hears of it.
   for (std::size_t k = 0; k < out.size(); ++k) {
     Refined& h = out[k];
+    record.icp_steps += static_cast<std::size_t>(h.icp.iterations);
     if (!h.verified || !h.v.accepted) continue;
     h.confidence = pose_confidence(h.v);
     if (options_.accept.on_verified) options_.accept.on_verified({hypotheses[k].object, h.T_camera_object, h.v, h.confidence});
@@ -935,17 +938,16 @@ bool Recognizer::refused_after_screen(const Region& region, const Candidate& c, 
     ++out.screened_out;
     return true;
   }
+  if (!(options_.match.merge_rotation_deg > 0)) return false;
   std::vector<Transform>& places = region.refined_places[c.object];
-  if (options_.match.merge_rotation_deg > 0) {
-    const double reach = options_.match.merge_share * db_.objects[c.object].diameter_m;
-    const bool merged = std::any_of(places.begin(), places.end(), [&](const Transform& U) {
-      return (T_camera_object.translation() - U.translation()).norm() <= reach &&
-             rotation_difference_deg(T_camera_object.linear(), U.linear()) <= options_.match.merge_rotation_deg;
-    });
-    if (merged) {
-      ++out.screened_merged;
-      return true;
-    }
+  const double reach = options_.match.merge_share * db_.objects[c.object].diameter_m;
+  const bool merged = std::any_of(places.begin(), places.end(), [&](const Transform& U) {
+    return (T_camera_object.translation() - U.translation()).norm() <= reach &&
+           rotation_difference_deg(T_camera_object.linear(), U.linear()) <= options_.match.merge_rotation_deg;
+  });
+  if (merged) {
+    ++out.screened_merged;
+    return true;
   }
   places.push_back(T_camera_object);
   return false;
@@ -1053,9 +1055,10 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
   std::optional<Detection> found;
   std::vector<Hypothesis> hypotheses;
   for (const std::size_t i : which) {
-    // A screened pose from where the screen led it (MatchOptions::prescreen).
+    // A screened pose from where the screen led it (MatchOptions::refine_from_screen).
     const Candidate& c = region.candidates[i];
-    hypotheses.push_back(c.screened() ? Hypothesis{c.object, region.screened_poses[c.screened_pose], true} : Hypothesis{c.object, c.T_camera_object});
+    if (c.screened() && options_.match.refine_from_screen) hypotheses.push_back({c.object, region.screened_poses[c.screened_pose], true});
+    else hypotheses.push_back({c.object, c.T_camera_object});
   }
   // All at once on the threads there are; then taken in order, as one after the other would.
   const Description& d = region.description;

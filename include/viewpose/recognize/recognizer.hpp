@@ -110,14 +110,18 @@ struct MatchOptions {
   /// results' sets and the real negatives, no pose that went on to pass verification was seen
   /// through at more than 0.36 there; 32 % of the full refinements on the real YCB-Video frames
   /// and 29 % in the rooms were spared, with byte-identical detections.
-  /// A screened pose is refined in full from where the screen led it, not from where it started,
-  /// and from the ICP schedule's second stage on: the screen ran the coarse stages on a quarter of
-  /// the points, and the second is run again on all of them (an ICP that leaves less than
-  /// IcpOptions::min_fitness_after_first_stage of the region on the model is then given up after
-  /// the second stage).
   std::size_t prescreen = 48;
   std::size_t prescreen_points = 100;
   int prescreen_iterations = 8;
+  /// A screened pose is refined in full from where the screen led it, not from where it started,
+  /// and without the ICP schedule's first stage: the screen ran the coarse stages on a quarter of
+  /// the points, and the rest of the schedule runs on all of them (with the default three stages,
+  /// from the 2 cm stage on; an ICP that then leaves less than
+  /// IcpOptions::min_fitness_after_first_stage of the region on the model is given up after the
+  /// first stage it runs). The screen's steps are not taken again: on the real YCB-Video frames
+  /// 24.2 -> 19.7 ICP steps a full refinement (Recognition::icp_steps), the same poses found
+  /// (docs/BENCHMARK.md). false: from the starting pose, the whole schedule.
+  bool refine_from_screen = true;
   /// Many starting poses of a region lead to one place: the views' rolls and the votes' poses are
   /// thick around each good fit (a fifth to a third of the screened poses on the real YCB-Video and
   /// mOSD frames lay within 5 % of the object's diameter and 10 degrees of another of the same
@@ -125,10 +129,11 @@ struct MatchOptions {
   /// diameter of where it led a pose already refined in full for the region (the same object) is
   /// not refined again: it keeps its place and spends its share of the budget unrefined, as one the
   /// quick test refused (Recognition::screened_merged; 0 degrees: every one is refined).
-  /// Measured with refining from where the screen led (above; make results, the real YCB-Video
-  /// frames, the simulated rooms): the same poses found on every set, the real negatives'
-  /// detections unchanged, 6 % fewer full refinements, and a quarter less time in those left
-  /// (19.7 ICP steps each instead of 24.2; docs/BENCHMARK.md).
+  /// Measured with refine_from_screen (make results, the real YCB-Video frames, the simulated
+  /// rooms): the same poses found on every set, the real negatives' detections unchanged, 6 %
+  /// fewer full refinements (docs/BENCHMARK.md). A vote's screened pose (PoseSource::both,
+  /// touching) is compared with the places of the region's views' poses too: the same place,
+  /// refined from the same pose.
   double merge_rotation_deg = 5;
   double merge_share = 0.02;
   /// At most this many starting poses are refined in full and verified per region, best first, the
@@ -422,9 +427,13 @@ struct Recognition {
   /// Of those, refused where the screen led them, by verification's quick test (the camera sees
   /// past the model there), without being refined in full.
   std::size_t screened_out = 0;
-  /// Of those, led by the screen to where another of the region's poses was led and refined in
-  /// full (MatchOptions::merge_rotation_deg), without being refined again.
+  /// Of the screened poses, led by the screen to where another of the region's poses was led and
+  /// chosen for full refinement (MatchOptions::merge_rotation_deg), and not refined.
   std::size_t screened_merged = 0;
+  /// ICP steps of every pose refined in full: half turns included, and the poses of a batch
+  /// refined beside one that passed, which `hypotheses` does not count (the screen's steps not
+  /// counted). The refinements' work, the same on any machine.
+  std::size_t icp_steps = 0;
   std::size_t split_clusters = 0;  ///< clusters whose search went on in their convex parts
   std::size_t regions = 0;  ///< clusters, parts and remainders described and matched against the database
   /// Convex parts of split clusters that the search never reached (a pose found, the budget spent or
@@ -511,8 +520,10 @@ class Recognizer {
     bool try_near_misses = false;
     bool screen_done = false;  // prescreen has ordered its candidates
     std::vector<Transform> screened_poses;  // where the short ICP led each screened candidate
-    // By object, where the short ICP led the screened candidates refined in full so far
-    // (MatchOptions::merge_rotation_deg). Chosen one after another, on the calling thread.
+    // By object, where the short ICP led the screened candidates chosen for full refinement so far
+    // (MatchOptions::merge_rotation_deg), kept through the votes pass (search_votes_alone): a
+    // vote's pose led to one of them is the same place. Chosen one after another, on the calling
+    // thread.
     mutable std::vector<std::vector<Transform>> refined_places;
     VerifyOptions partial;  // verify with min_cluster_explained lowered (SplitOptions::joint_min_cluster_explained)
     // The best pose so far that passed `partial` but not `verify` (with a confidence computed as if
@@ -587,8 +598,8 @@ class Recognizer {
   // why that is safe), counted in `out.screened_out`; or the short ICP led it where it led one the
   // region has refined already (MatchOptions::merge_rotation_deg), counted in
   // `out.screened_merged`. Such a pose keeps its place in the order and its share of the budget.
-  // Tested only when its turn comes; one that passes is recorded as refined (the caller refines
-  // it).
+  // Tested only when its turn comes; where it passes, its place is recorded as chosen for full
+  // refinement (the caller refines it, unless the deadline passes first).
   bool refused_after_screen(const Region& region, const Candidate& c, const FrameAndPlanes& frame, Recognition& out) const;
   // The starting poses `which` (indices into region.candidates), refined and verified together: the
   // first accepted in order (with take_best, the best). A batch in which nothing passes but one pose
@@ -737,8 +748,8 @@ class Recognizer {
   // the share of a region brought within the final stage's reach, screen_reach_m_, ranks a pose.
   IcpOptions screen_icp_;
   float screen_reach_m_ = 0.01f;
-  // The full schedule without the stages the screen ran (MatchOptions::merge_rotation_deg's doc),
-  // for the poses it led.
+  // The full schedule without its first stage, for the poses the screen led
+  // (MatchOptions::refine_from_screen).
   IcpOptions after_screen_icp_;
 };
 
