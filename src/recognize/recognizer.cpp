@@ -92,6 +92,14 @@ double width_of(std::initializer_list<const PointCloud*> clouds) {
   return any ? static_cast<double>((hi - lo).maxCoeff()) : 0.0;
 }
 
+// Whether T lies within `metres` and `degrees` of one of `poses` (a pose refused or a place refined
+// already: MatchOptions::refused_rotation_deg, merge_rotation_deg).
+bool near_any(std::span<const Transform> poses, const Transform& T, double metres, double degrees) {
+  return std::any_of(poses.begin(), poses.end(), [&](const Transform& U) {
+    return (T.translation() - U.translation()).norm() <= metres && rotation_difference_deg(T.linear(), U.linear()) <= degrees;
+  });
+}
+
 // The clusters of the points not `explained` (indices into `points`).
 std::vector<Cluster> clusters_of_unexplained(const PointCloud& points, const std::vector<char>& explained, const ClusterOptions& options) {
   std::vector<std::uint32_t> rest;
@@ -448,9 +456,10 @@ void Recognizer::search_votes_alone(const PointCloud& points, Region whole, cons
   // Its views' poses were tried: they count as tried, and the poses refused there stay refused (a
   // vote's pose refined to within MatchOptions::refused_rotation_deg and refused_translation_m of
   // one is not verified again), as do the places its screened poses were refined from (a vote's
-  // pose the screen leads to one is not refined: MatchOptions::merge_rotation_deg). The pose it kept as explaining part of the region was offered to
-  // explain_jointly there: the votes' search starts without one, as on a region described afresh.
-  // (It keeps no seed: a whole region gives none.)
+  // pose the screen leads to one is not refined: MatchOptions::merge_rotation_deg). The pose it
+  // kept as explaining part of the region was offered to explain_jointly there: the votes' search
+  // starts without one, as on a region described afresh. (It keeps no seed: a whole region gives
+  // none.)
   whole.tried = whole.candidates.size();
   whole.best_partial.reset();
   std::vector<Region> regions;
@@ -780,11 +789,7 @@ std::vector<Recognizer::Refined> Recognizer::refine_and_verify(std::span<const H
   std::vector<Refined> out(hypotheses.size());
   const auto is_refused = [&](std::uint32_t object, const Transform& T) {
     if (!refused || !(options_.match.refused_rotation_deg > 0)) return false;
-    const std::vector<Transform>& poses = (*refused)[object];
-    return std::any_of(poses.begin(), poses.end(), [&](const Transform& U) {
-      return (T.translation() - U.translation()).norm() <= options_.match.refused_translation_m &&
-             rotation_difference_deg(T.linear(), U.linear()) <= options_.match.refused_rotation_deg;
-    });
+    return near_any((*refused)[object], T, options_.match.refused_translation_m, options_.match.refused_rotation_deg);
   };
   // Made before the threads start (each object once, under its own lock).
   for (const Hypothesis& h : hypotheses) prepared(h.object);
@@ -941,11 +946,7 @@ bool Recognizer::refused_after_screen(const Region& region, const Candidate& c, 
   if (!(options_.match.merge_rotation_deg > 0)) return false;
   std::vector<Transform>& places = region.refined_places[c.object];
   const double reach = options_.match.merge_share * db_.objects[c.object].diameter_m;
-  const bool merged = std::any_of(places.begin(), places.end(), [&](const Transform& U) {
-    return (T_camera_object.translation() - U.translation()).norm() <= reach &&
-           rotation_difference_deg(T_camera_object.linear(), U.linear()) <= options_.match.merge_rotation_deg;
-  });
-  if (merged) {
+  if (near_any(places, T_camera_object, reach, options_.match.merge_rotation_deg)) {
     ++out.screened_merged;
     return true;
   }
