@@ -89,6 +89,46 @@ void BM_SegmentUnorganizedCloud(benchmark::State& state) {
 }
 BENCHMARK(BM_SegmentUnorganizedCloud)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// A simulated room (issue 11's preset): a table among walls, floor and furniture up to 4 m away,
+// which leave three to five times the points of a tabletop frame once the planes are gone.
+const Frame& room_frame() {
+  static const Frame frame = [] {
+    const std::vector<ObjectModel> objects = {{1, "jug", make_jug()}, {2, "box", make_named_shape("box")}};
+    RoomPresetOptions options;
+    options.rooms = 1;
+    options.images = 2;
+    const SimDataset rooms = make_room_scenes(objects, CameraIntrinsics::kinect_v1(), options, 11);
+    return frame_from_depth(simulate_image(rooms, rooms.scenes[0].images[0], SensorModel::kinect_v1(), 1).depth,
+                            CameraIntrinsics::kinect_v1());
+  }();
+  return frame;
+}
+
+void BM_SegmentRoomFrame(benchmark::State& state) {
+  const Frame& frame = room_frame();
+  SegmentTimes times;
+  for (auto _ : state) benchmark::DoNotOptimize(segment_scene(frame.cloud, {}, &times));
+  const double n = static_cast<double>(state.iterations());
+  state.counters["planes_ms"] = times.planes_ms / n;
+  state.counters["downsample_ms"] = times.downsample_ms / n;
+  state.counters["clusters_ms"] = times.clusters_ms / n;
+}
+BENCHMARK(BM_SegmentRoomFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Euclidean clusters alone, on what a room frame leaves once its planes are removed, voxelized.
+void BM_ClustersOfRoomFrame(benchmark::State& state) {
+  static const PointCloud points = [] {
+    SegmentOptions no_clusters;
+    no_clusters.clusters.max_points = 0;
+    return segment_scene(room_frame().cloud, no_clusters).points;
+  }();
+  std::vector<std::uint32_t> all(points.size());
+  for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+  state.SetLabel(std::to_string(points.size()) + " points");
+  for (auto _ : state) benchmark::DoNotOptimize(euclidean_clusters(points, all));
+}
+BENCHMARK(BM_ClustersOfRoomFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 void BM_NormalsOfCluster(benchmark::State& state) {
   const Inputs& in = inputs();
   state.SetLabel(std::to_string(in.cluster.size()) + " points");

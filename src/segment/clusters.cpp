@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -35,8 +36,6 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
   const std::vector<KeyedIndex>& keyed = grid.items;  // cube, position in `indices`
   const std::vector<std::uint64_t>& cubes = grid.cells;
   const std::vector<std::size_t>& first = grid.first;
-  constexpr std::int64_t kMask = CellGrid::kMask;
-  const auto key = CellGrid::key;
   std::vector<std::uint32_t> parent(cubes.size());
   for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
   const auto find = [&](std::uint32_t i) {
@@ -52,41 +51,50 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
         if ((sorted[i] - sorted[j]).squaredNorm() <= t2) return true;
     return false;
   };
-  // The later columns (x, y) within two cubes, and the same column: keys only grow from cube to cube,
-  // so each column's position in `cubes` is a pointer that only moves forward.
-  std::vector<std::pair<int, int>> columns;
-  for (int dx = 0; dx <= 2; ++dx)
-    for (int dy = -2; dy <= 2; ++dy)
-      if (dx > 0 || dy >= 0) columns.emplace_back(dx, dy);
-  // The pairs of cubes that may hold linked points, found in one pass. Touching cubes are tried
-  // first: they are nearly always linked by their first few pairs. Then cubes further apart, most
-  // of which are joined by then and need no comparison (taken in key order instead, every pair of
-  // points of two cubes across a gap was compared before their clusters met).
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> touching, apart;
-  std::vector<std::size_t> pointer(columns.size(), 0);
-  for (std::size_t a = 0; a < cubes.size(); ++a) {
-    const auto [x, y, z] = CellGrid::coordinates(cubes[a]);
-    for (std::size_t c = 0; c < columns.size(); ++c) {
-      const auto [dx, dy] = columns[c];
+  // The pairs of cubes that may hold linked points: for each later column (x + dx, y + dy) within
+  // two cubes, and the same column, one pass over the cubes in key order, in which the first cube
+  // of the neighbour's range is a pointer that only moves forward. A neighbour's key is the cube's
+  // plus a constant (bin_points keeps every cube two clear of the key's ends, so no field
+  // overflows into the next). Touching cubes are joined as they are found: they are nearly always
+  // linked by their first few pairs. Cubes further apart are kept for a last pass, once every
+  // touching pair is joined, when most of them are joined already and need no comparison; a pair
+  // already joined when found is not kept, as joined cubes never part. (Every pair kept in lists
+  // and joined after cost more than the comparisons: megabytes written and read back. One pass
+  // over the cubes with a pointer per column cost twice these passes: its loops' lengths changed
+  // from column to column, and the processor mispredicted them.) Whatever the order of the joins,
+  // each cube's root is the smallest cube of its cluster, so the clusters are the same.
+  const auto join = [&](std::uint32_t a, std::uint32_t b) {
+    const std::uint32_t ra = find(a), rb = find(b);
+    if (ra != rb && linked(a, b)) parent[std::max(ra, rb)] = std::min(ra, rb);
+  };
+  std::vector<std::uint64_t> keys(cubes.begin(), cubes.end());
+  keys.push_back(std::numeric_limits<std::uint64_t>::max());  // ends every scan
+  const std::size_t n_cubes = cubes.size();
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> apart;
+  for (int dx = 0; dx <= 2; ++dx) {
+    for (int dy = -2; dy <= 2; ++dy) {
+      if (dx == 0 && dy < 0) continue;  // earlier columns: their pairs are found from the other cube
       const bool same_column = dx == 0 && dy == 0;
-      const std::uint64_t lo = key(x + dx, y + dy, same_column ? z + 1 : z - 2), hi = key(x + dx, y + dy, z + 2);
-      std::size_t& b = pointer[c];
-      while (b < cubes.size() && cubes[b] < lo) ++b;
-      for (std::size_t j = b; j < cubes.size() && cubes[j] <= hi; ++j) {
-        const std::int64_t dz = static_cast<std::int64_t>(cubes[j] & kMask) - z;
-        // Cubes whose nearest corners are farther apart than the tolerance cannot be linked.
-        const std::int64_t gap = CellGrid::squared_gap(dx, dy, dz);
-        if (gap > 3) continue;
-        (gap == 0 ? touching : apart).emplace_back(static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(j));
+      const std::uint64_t offset = (static_cast<std::uint64_t>(dx) << 42) + (static_cast<std::uint64_t>(static_cast<std::int64_t>(dy)) << 21);
+      const std::uint64_t from = same_column ? 1 : static_cast<std::uint64_t>(-2);  // z + 1 or z - 2, to z + 2
+      const bool near_column = dx <= 1 && dy >= -1 && dy <= 1;
+      std::size_t b = 0;
+      for (std::size_t a = 0; a < n_cubes; ++a) {
+        const std::uint64_t column = keys[a] + offset;
+        const std::uint64_t lo = column + from, hi = column + 2;
+        while (keys[b] < lo) ++b;
+        for (std::size_t j = b; keys[j] <= hi; ++j) {
+          const auto ua = static_cast<std::uint32_t>(a), uj = static_cast<std::uint32_t>(j);
+          // Touching: no axis more than one cube apart. (Cubes two apart on every axis still lie
+          // within the tolerance at their nearest corners: sqrt(3) sides.)
+          const bool touching = near_column && keys[j] - column + 1 <= 2;  // dz in -1..1
+          if (touching) join(ua, uj);
+          else if (find(ua) != find(uj)) apart.emplace_back(ua, uj);
+        }
       }
     }
   }
-  for (const auto* pairs : {&touching, &apart}) {
-    for (const auto& [a, j] : *pairs) {
-      const std::uint32_t ra = find(a), rb = find(j);
-      if (ra != rb && linked(a, j)) parent[std::max(ra, rb)] = std::min(ra, rb);
-    }
-  }
+  for (const auto& [a, j] : apart) join(a, j);
   // Clusters in the order of their first point, as a region growing from each unvisited point would give.
   std::vector<std::uint32_t> smallest(cubes.size(), UINT32_MAX);
   for (std::size_t a = 0; a < cubes.size(); ++a) {

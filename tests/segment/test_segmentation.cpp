@@ -386,5 +386,30 @@ TEST(Clusters, CubeGridGivesExactlyTheTransitiveClosure) {
   EXPECT_TRUE(euclidean_clusters(cloud, {}, o).empty()) << "no indices, no clusters";
 }
 
+TEST(Clusters, SparsePointsLinkAcrossEveryNeighbouringCube) {
+  // Points scattered through a volume about a tolerance apart, as a far wall's noisy points are:
+  // most cubes hold one or two points, and links run in every direction, to cubes up to two away
+  // on each axis, across every kind of neighbour the search looks at (and some just too far).
+  for (const float spread : {0.1f, 0.11f, 0.12f}) {
+    std::mt19937_64 rng(9);
+    std::uniform_real_distribution<float> u(-spread, spread);
+    std::vector<Eigen::Vector3f> pts;
+    for (int k = 0; k < 1500; ++k) pts.emplace_back(u(rng), u(rng), 3.0f + u(rng));
+    const PointCloud cloud = PointCloud::from_points(pts);
+    std::vector<std::uint32_t> all(cloud.size());
+    for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+    ClusterOptions o;
+    o.min_points = 1;
+    std::vector<Cluster> expected = brute_force_clusters(cloud, o.tolerance_m);
+    std::vector<Cluster> got = euclidean_clusters(cloud, all, o);
+    ASSERT_GT(expected.size(), 3u) << spread << ": some points lie apart";
+    ASSERT_LT(expected.size(), pts.size() / 2) << spread << ": most points are linked to another";
+    const auto by_first = [](const Cluster& a, const Cluster& b) { return a.front() < b.front(); };
+    std::sort(expected.begin(), expected.end(), by_first);
+    std::sort(got.begin(), got.end(), by_first);
+    EXPECT_EQ(got, expected) << spread;
+  }
+}
+
 }  // namespace
 }  // namespace viewpose
