@@ -58,24 +58,28 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
   // overflows into the next). Touching cubes are joined as they are found: they are nearly always
   // linked by their first few pairs. Cubes further apart are kept for a last pass, once every
   // touching pair is joined, when most of them are joined already and need no comparison; a pair
-  // already joined when found is not kept, as joined cubes never part. (Every pair kept in lists
-  // and joined after cost more than the comparisons: megabytes written and read back. One pass
-  // over the cubes with a pointer per column cost twice these passes: its loops' lengths changed
-  // from column to column, and the processor mispredicted them.) Whatever the order of the joins,
-  // each cube's root is the smallest cube of its cluster, so the clusters are the same.
+  // already joined when found is not kept, as joined cubes never part. (On a room's frame,
+  // BM_ClustersOfRoomFrame: every pair kept in lists and joined after, megabytes written and read
+  // back, took 28.8 ms; joined as found, 23.3; in these passes instead of one pass over the cubes
+  // with a pointer per column, whose loops' lengths changed from column to column, 20.1.)
+  // Whatever the order of the joins, each cube's root is the smallest cube of its cluster, so the
+  // clusters are the same.
   const auto join = [&](std::uint32_t a, std::uint32_t b) {
     const std::uint32_t ra = find(a), rb = find(b);
     if (ra != rb && linked(a, b)) parent[std::max(ra, rb)] = std::min(ra, rb);
   };
+  // The keys again, with one larger than any after them: it ends every scan without a bound check.
   std::vector<std::uint64_t> keys(cubes.begin(), cubes.end());
-  keys.push_back(std::numeric_limits<std::uint64_t>::max());  // ends every scan
+  keys.push_back(std::numeric_limits<std::uint64_t>::max());
   const std::size_t n_cubes = cubes.size();
   std::vector<std::pair<std::uint32_t, std::uint32_t>> apart;
   for (int dx = 0; dx <= 2; ++dx) {
     for (int dy = -2; dy <= 2; ++dy) {
       if (dx == 0 && dy < 0) continue;  // earlier columns: their pairs are found from the other cube
       const bool same_column = dx == 0 && dy == 0;
-      const std::uint64_t offset = (static_cast<std::uint64_t>(dx) << 42) + (static_cast<std::uint64_t>(static_cast<std::int64_t>(dy)) << 21);
+      // (dy < 0 wraps around: adding it subtracts from y's field.)
+      const auto dy_bits = static_cast<std::uint64_t>(static_cast<std::int64_t>(dy));
+      const std::uint64_t offset = (static_cast<std::uint64_t>(dx) << 42) + (dy_bits << 21);
       const std::uint64_t from = same_column ? 1 : static_cast<std::uint64_t>(-2);  // z + 1 or z - 2, to z + 2
       const bool near_column = dx <= 1 && dy >= -1 && dy <= 1;
       std::size_t b = 0;

@@ -79,9 +79,15 @@ Plane fit_plane(std::span<const Eigen::Vector3f> points, std::span<const std::ui
   // The sample's coordinates, each in an array of its own: every hypothesis counts its inliers
   // among them, and read through the indices those counts were a loop the compiler could not
   // vectorize (most of the planes' time on a room's frame, where a far wall's noise keeps RANSAC
-  // from stopping early). The same sums in the order Eigen's dot adds them, so the same counts.
+  // from stopping early). The same sums in the order Eigen's dot adds them, so the same counts
+  // (where multiplies and adds are not fused: a VIEWPOSE_NATIVE build may differ in the last bit).
   std::vector<float> xs(sample.size()), ys(sample.size()), zs(sample.size());
-  for (std::size_t k = 0; k < sample.size(); ++k) xs[k] = points[sample[k]].x(), ys[k] = points[sample[k]].y(), zs[k] = points[sample[k]].z();
+  for (std::size_t k = 0; k < sample.size(); ++k) {
+    const Eigen::Vector3f& p = points[sample[k]];
+    xs[k] = p.x();
+    ys[k] = p.y();
+    zs[k] = p.z();
+  }
   std::size_t best_count = 0;
   double needed = o.max_iterations;
   for (int it = 0; it < o.max_iterations && it < needed; ++it) {

@@ -3,6 +3,7 @@
 #include <limits>
 #include <random>
 #include <set>
+#include <array>
 #include <numeric>
 
 #include <fmt/format.h>
@@ -386,29 +387,58 @@ TEST(Clusters, CubeGridGivesExactlyTheTransitiveClosure) {
   EXPECT_TRUE(euclidean_clusters(cloud, {}, o).empty()) << "no indices, no clusters";
 }
 
-TEST(Clusters, SparsePointsLinkAcrossEveryNeighbouringCube) {
-  // Points scattered through a volume about a tolerance apart, as a far wall's noisy points are:
-  // most cubes hold one or two points, and links run in every direction, to cubes up to two away
-  // on each axis, across every kind of neighbour the search looks at (and some just too far).
-  for (const float spread : {0.1f, 0.11f, 0.12f}) {
-    std::mt19937_64 rng(9);
-    std::uniform_real_distribution<float> u(-spread, spread);
-    std::vector<Eigen::Vector3f> pts;
-    for (int k = 0; k < 1500; ++k) pts.emplace_back(u(rng), u(rng), 3.0f + u(rng));
-    const PointCloud cloud = PointCloud::from_points(pts);
-    std::vector<std::uint32_t> all(cloud.size());
-    for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
-    ClusterOptions o;
-    o.min_points = 1;
-    std::vector<Cluster> expected = brute_force_clusters(cloud, o.tolerance_m);
-    std::vector<Cluster> got = euclidean_clusters(cloud, all, o);
-    ASSERT_GT(expected.size(), 3u) << spread << ": some points lie apart";
-    ASSERT_LT(expected.size(), pts.size() / 2) << spread << ": most points are linked to another";
-    const auto by_first = [](const Cluster& a, const Cluster& b) { return a.front() < b.front(); };
-    std::sort(expected.begin(), expected.end(), by_first);
-    std::sort(got.begin(), got.end(), by_first);
-    EXPECT_EQ(got, expected) << spread;
-  }
+TEST(Clusters, PairsLinkAcrossEveryNeighbouringCube) {
+  // Pairs of points in neighbouring cubes (of side tolerance / sqrt(3)), at every offset up to two
+  // cubes on each axis, each pair far from every other: whether a pair is one cluster or two rests
+  // on its one link alone. Each lies near the cubes' facing corners, some just within the
+  // tolerance and some just beyond; the test checks that links are made at every offset whose
+  // cubes' nearest corners lie within it. A neighbour left out of the search, or a link missed at
+  // any offset, fails.
+  ClusterOptions o;
+  o.min_points = 1;
+  const float cube = o.tolerance_m / std::sqrt(3.0f);
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<float> u(0.02f, 0.98f);
+  // A coordinate within its cube: near the side facing the other cube (d > 0: the far side), or anywhere.
+  const auto local = [&](int d) { return cube * (d > 0 ? 1.0f - 0.2f * u(rng) : d < 0 ? 0.2f * u(rng) : u(rng)); };
+  std::vector<Eigen::Vector3f> pts;
+  std::vector<Cluster> expected;
+  std::set<std::array<int, 3>> linked_offsets;
+  int site = 0;
+  for (int dx = -2; dx <= 2; ++dx)
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dz = -2; dz <= 2; ++dz) {
+        for (int trial = 0; trial < 24; ++trial, ++site) {
+          // Each pair at its own site, 12 cubes (14 cm) from the next along a row.
+          const Eigen::Vector3f origin = cube * Eigen::Vector3f(static_cast<float>(12 * (site % 40)), static_cast<float>(12 * (site / 40 % 40)),
+                                                                static_cast<float>(80 + 12 * (site / 1600)));
+          const Eigen::Vector3f a = origin + Eigen::Vector3f(local(dx), local(dy), local(dz));
+          const Eigen::Vector3f b = origin + cube * Eigen::Vector3f(static_cast<float>(dx), static_cast<float>(dy), static_cast<float>(dz)) +
+                                    Eigen::Vector3f(local(-dx), local(-dy), local(-dz));
+          const auto first = static_cast<std::uint32_t>(pts.size());
+          pts.push_back(a);
+          pts.push_back(b);
+          if ((a - b).squaredNorm() <= o.tolerance_m * o.tolerance_m) {
+            expected.push_back({first, first + 1});
+            linked_offsets.insert({dx, dy, dz});
+          } else {
+            expected.push_back({first});
+            expected.push_back({first + 1});
+          }
+        }
+      }
+  // Every offset but the eight two cubes away on all three axes, whose corners lie a tolerance apart.
+  EXPECT_EQ(linked_offsets.size(), 5u * 5u * 5u - 8u);
+  const std::size_t pairs = pts.size() / 2;
+  EXPECT_GT(expected.size() - pairs, pairs / 10) << "pairs just too far apart, too";
+  const PointCloud cloud = PointCloud::from_points(pts);
+  std::vector<std::uint32_t> all(cloud.size());
+  for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+  std::vector<Cluster> got = euclidean_clusters(cloud, all, o);
+  const auto by_first = [](const Cluster& l, const Cluster& r) { return l.front() < r.front(); };
+  std::sort(expected.begin(), expected.end(), by_first);
+  std::sort(got.begin(), got.end(), by_first);
+  EXPECT_EQ(got, expected);
 }
 
 }  // namespace
