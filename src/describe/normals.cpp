@@ -14,25 +14,13 @@
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/cell_grid.hpp"
 
+#include "core/clones.hpp"
+
 namespace viewpose {
 
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-// ThreadSanitizer instruments the resolver that picks a clone, which runs while the program is
-// being loaded, before the sanitizer's runtime exists: the program crashed before main. Under it
-// (gcc's __SANITIZE_THREAD__, clang's __has_feature) only the baseline version is built.
-#if defined(__SANITIZE_THREAD__)
-#define VIEWPOSE_CLONES
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
-#define VIEWPOSE_CLONES
-#endif
-#endif
-#ifndef VIEWPOSE_CLONES
-#define VIEWPOSE_CLONES [[gnu::target_clones("avx2", "default")]]
-#endif
 
 // The count of the candidates within sqrt(r2) of p, and the sums of their offsets from p and of
 // the offsets' products (x, y, z, xx, xy, xz, yy, yz, zz): one branch-free pass with a 0/1 weight

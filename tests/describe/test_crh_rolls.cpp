@@ -1,7 +1,8 @@
 // The roll search (crh_roll_angles) against the textbook computation it stands for: the phase
 // correlation of the two spectra, its inverse transform at every lag one complex product at a time,
 // and a full stable sort of the lags. The fast code (a table of roots read row by row, the even and
-// odd harmonics summed apart over half the lags, the magnitude without a call, a partial sort) must
+// odd harmonics summed apart over half the lags, compiled for AVX2 too, the magnitude without a
+// call, only the lags at or above the peak bar ordered, and at most `quantile` of them) must
 // find the same angles, bit for bit, on thousands of seeded random histograms: the CRHs of random
 // normals, and raw random spectra.
 #include <algorithm>
