@@ -151,15 +151,17 @@ void BM_VfhAndCrh(benchmark::State& state) {
 BENCHMARK(BM_VfhAndCrh)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The rolls of the cluster against every view of the jug's database (a real frame's region is
-// matched to 20 views of each object: 140 roll searches for a database of seven).
+// matched to 20 views of each object: 140 roll searches for a database of seven). Arg 0: PCL's
+// peak options (RollOptions{}: 5 peaks at 0.8 of the best); 1: the recognizer's (MatchOptions).
 void BM_CrhRollsAllViews(benchmark::State& state) {
   const Inputs& in = inputs();
+  const RollOptions options = state.range(0) == 0 ? RollOptions{} : MatchOptions{}.roll;
   for (auto _ : state) {
-    for (const ViewEntry& view : in.db.views) benchmark::DoNotOptimize(crh_roll_angles(view.crh, in.description.crh));
+    for (const ViewEntry& view : in.db.views) benchmark::DoNotOptimize(crh_roll_angles(view.crh, in.description.crh, options));
   }
   state.SetLabel(std::to_string(in.db.views.size()) + " views");
 }
-BENCHMARK(BM_CrhRollsAllViews)->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_CrhRollsAllViews)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->UseRealTime();
 
 // Matching one cluster against 1000 objects x 80 views: through the index, and exhaustively.
 const ViewDatabase& thousand_objects() {
@@ -188,25 +190,27 @@ void BM_IcpOneHypothesis(benchmark::State& state) {
 }
 BENCHMARK(BM_IcpOneHypothesis)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// The screen's short ICP (MatchOptions::prescreen): the schedule's coarse stages, 8 steps each at
-// most, on 100 of the cluster's points, then its fitness at the last stage's reach, as the
-// recognizer screens each starting pose. Arg: the points it takes (100 as shipped; 400 as full ICP).
+// The screen's short ICP (MatchOptions::prescreen), as the recognizer makes it from the default
+// options: the ICP schedule's stages but the last, MatchOptions::prescreen_iterations steps each
+// at most, on prescreen_points of the cluster's points, then its fitness at the last stage's
+// reach. Arg: the points it takes (100 as shipped; 400, full ICP's).
 void BM_IcpScreenOneHypothesis(benchmark::State& state) {
   const Inputs& in = inputs();
   const IcpTarget target(in.db.objects[0].model_points, in.db.objects[0].model_normals);
   IcpOptions screen;
-  screen.max_correspondence_m = {0.04f, 0.02f};
-  screen.max_iterations_per_stage = 8;
+  const float reach = screen.max_correspondence_m.back();
+  screen.max_correspondence_m.pop_back();
+  screen.max_iterations_per_stage = MatchOptions{}.prescreen_iterations;
   screen.max_source_points = static_cast<std::size_t>(state.range(0));
   screen.min_fitness_after_first_stage = 0;
   const IcpResult r = icp_point_to_plane(in.icp_source, target, in.T_model_cluster_initial, screen);  // fills the grid's cells
   state.SetLabel(std::to_string(r.iterations) + " iterations");
   for (auto _ : state) {
     const IcpResult screened = icp_point_to_plane(in.icp_source, target, in.T_model_cluster_initial, screen);
-    benchmark::DoNotOptimize(icp_fitness(in.icp_source, target, screened.T_target_source, 0.01f, screen));
+    benchmark::DoNotOptimize(icp_fitness(in.icp_source, target, screened.T_target_source, reach, screen));
   }
 }
-BENCHMARK(BM_IcpScreenOneHypothesis)->Arg(100)->Arg(400)->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_IcpScreenOneHypothesis)->Arg(static_cast<std::int64_t>(MatchOptions{}.prescreen_points))->Arg(400)->Unit(benchmark::kMicrosecond)->UseRealTime();
 
 void BM_VerifyOneHypothesis(benchmark::State& state) {
   const Inputs& in = inputs();

@@ -4,6 +4,8 @@
 // measured to matter (the normals' neighbour sums, the CRH roll search's harmonics). AVX2 does not
 // imply fused multiply-adds: a loop whose elements are computed apart (the harmonics) gives the
 // same bits in both versions; a sum across elements (the normals') is added in another order.
+// (With VIEWPOSE_NATIVE the baseline version may fuse them too; crh.cpp is compiled with
+// -ffp-contract=off, so its bits stay the same there as well.)
 //
 // ThreadSanitizer instruments the resolver that picks a clone, which runs while the program is
 // being loaded, before the sanitizer's runtime exists: the program crashed before main. Under it

@@ -2,7 +2,7 @@
 // correlation of the two spectra, its inverse transform at every lag one complex product at a time,
 // and a full stable sort of the lags. The fast code (a table of roots read row by row, the even and
 // odd harmonics summed apart over half the lags, compiled for AVX2 too, the magnitude without a
-// call, only the lags at or above the peak bar ordered, and at most `quantile` of them) must
+// call, only the lags at or above the peak bar ordered, and at most quantile x 180 of them) must
 // find the same angles, bit for bit, on thousands of seeded random histograms: the CRHs of random
 // normals, and raw random spectra.
 #include <algorithm>
@@ -75,7 +75,11 @@ Crh random_spectrum(std::mt19937& rng) {
 
 TEST(CrhRollAngles, EqualTheTextbookPhaseCorrelationBitForBit) {
   std::mt19937 rng(20261203);
-  const RollOptions options[] = {{}, {10, 0.2f, 0.5f}, {3, 1.0f, 0.0f}, {5, 0.05f, 0.9f}};
+  // The defaults, the recognizer's, every lag, few lags; then bars that let more lags pass than
+  // are ordered (the selection), none ordered, and (with a positive best) a bar below every lag
+  // and one above them all.
+  const RollOptions options[] = {{},           {10, 0.2f, 0.5f},  {3, 1.0f, 0.0f},   {5, 0.05f, 0.9f},
+                                 {5, 0.05f, 0.0f}, {5, 0.0f, 0.8f}, {5, 0.2f, -1.0f}, {5, 0.2f, 1.5f}};
   int compared = 0;
   for (int trial = 0; trial < 1500; ++trial) {
     const bool raw = trial % 3 == 2;
@@ -86,7 +90,7 @@ TEST(CrhRollAngles, EqualTheTextbookPhaseCorrelationBitForBit) {
       ++compared;
     }
   }
-  EXPECT_EQ(compared, 6000);
+  EXPECT_EQ(compared, 12000);
 }
 
 TEST(CrhRollAngles, ARolledHistogramIsFoundAtItsRoll) {
