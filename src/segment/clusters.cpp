@@ -77,11 +77,8 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
     for (int dy = -2; dy <= 2; ++dy) {
       if (dx == 0 && dy < 0) continue;  // earlier columns: their pairs are found from the other cube
       const bool same_column = dx == 0 && dy == 0;
-      // (dy < 0 wraps around: adding it subtracts from y's field.)
-      const auto dy_bits = static_cast<std::uint64_t>(static_cast<std::int64_t>(dy));
-      const std::uint64_t offset = (static_cast<std::uint64_t>(dx) << 42) + (dy_bits << 21);
+      const std::uint64_t offset = CellGrid::step(dx, dy, 0);
       const std::uint64_t from = same_column ? 1 : static_cast<std::uint64_t>(-2);  // z + 1 or z - 2, to z + 2
-      const bool near_column = dx <= 1 && dy >= -1 && dy <= 1;
       std::size_t b = 0;
       for (std::size_t a = 0; a < n_cubes; ++a) {
         const std::uint64_t column = keys[a] + offset;
@@ -91,7 +88,8 @@ std::vector<Cluster> euclidean_clusters(const PointCloud& cloud, std::span<const
           const auto ua = static_cast<std::uint32_t>(a), uj = static_cast<std::uint32_t>(j);
           // Touching: no axis more than one cube apart. (Cubes two apart on every axis still lie
           // within the tolerance at their nearest corners: sqrt(3) sides.)
-          const bool touching = near_column && keys[j] - column + 1 <= 2;  // dz in -1..1
+          const auto dz = static_cast<std::int64_t>(keys[j] - column);  // -2..2, the step wrapped back
+          const bool touching = CellGrid::squared_gap(dx, dy, dz) == 0;
           if (touching) join(ua, uj);
           else if (find(ua) != find(uj)) apart.emplace_back(ua, uj);
         }

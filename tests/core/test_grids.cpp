@@ -1,9 +1,11 @@
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
 
 #include "test_support.hpp"
+#include "viewpose/core/cell_grid.hpp"
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/kdtree.hpp"
 #include "viewpose/core/nearest_grid.hpp"
@@ -259,6 +261,36 @@ TEST(OccupancyGrid, ARoomSizedCloudGetsWiderCellsAndBadInputNoGrid) {
   const OccupancyGrid none(huge, 0.01f);
   EXPECT_TRUE(none.empty());
   EXPECT_EQ(none.level(Eigen::Vector3f::Zero()), 0);
+}
+
+TEST(CellGrid, AKeyPlusAStepIsTheNeighboursKeyAndGapsAreCountedInWholeCells) {
+  // Cells at both ends of each field that bin_points keeps with a margin of two, and near the
+  // middle, where a step across zero borrows from the field above.
+  const std::int64_t m = 2, top = CellGrid::kMask - m;
+  const std::int64_t coords[] = {m, m + 1, CellGrid::kOffset - 1, CellGrid::kOffset, CellGrid::kOffset + 1, top - 1, top};
+  int checked = 0;
+  for (std::int64_t x : coords)
+    for (std::int64_t y : coords)
+      for (std::int64_t z : coords) {
+        const std::uint64_t k = CellGrid::key(x, y, z);
+        EXPECT_EQ(CellGrid::coordinates(k), (std::array<std::int64_t, 3>{x, y, z}));
+        for (std::int64_t dx = -m; dx <= m; ++dx)
+          for (std::int64_t dy = -m; dy <= m; ++dy)
+            for (std::int64_t dz = -m; dz <= m; ++dz) {
+              ASSERT_EQ(k + CellGrid::step(dx, dy, dz), CellGrid::key(x + dx, y + dy, z + dz)) << x << " " << y << " " << z;
+              ++checked;
+            }
+      }
+  EXPECT_EQ(checked, 7 * 7 * 7 * 125);
+  // Keys sort by x, then y, then z.
+  EXPECT_LT(CellGrid::key(5, 9, 9), CellGrid::key(6, 0, 0));
+  EXPECT_LT(CellGrid::key(5, 5, 9), CellGrid::key(5, 6, 0));
+  // Neighbours touch; cells two apart leave one cell's side between them on that axis.
+  EXPECT_EQ(CellGrid::squared_gap(1, -1, 1), 0);
+  EXPECT_EQ(CellGrid::squared_gap(2, 0, 0), 1);
+  EXPECT_EQ(CellGrid::squared_gap(-2, 2, 1), 2);
+  EXPECT_EQ(CellGrid::squared_gap(-2, -2, -2), 3);
+  EXPECT_EQ(CellGrid::squared_gap(0, 3, 0), 4);
 }
 
 TEST(RadixSort, EqualsTheComparisonSortIncludingTheOrderOfEqualKeys) {

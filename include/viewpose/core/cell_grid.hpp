@@ -26,6 +26,13 @@ struct CellGrid {
             static_cast<std::int64_t>(key & static_cast<std::uint64_t>(kMask))};
   }
 
+  /// What a cell's key adds to reach its neighbour's at (dx, dy, dz), modulo 2^64: a negative
+  /// step borrows from the field above, which the sum gives back. Valid where no coordinate leaves
+  /// its field (bin_points's margin keeps every cell's neighbours within it).
+  static std::uint64_t step(std::int64_t dx, std::int64_t dy, std::int64_t dz) {
+    return key(kOffset + dx, kOffset + dy, kOffset + dz) - key(kOffset, kOffset, kOffset);
+  }
+
   /// The smallest distance, in cell sides squared, between any points of two cells whose
   /// coordinates differ by (dx, dy, dz): neighbouring cells touch (0).
   static std::int64_t squared_gap(std::int64_t dx, std::int64_t dy, std::int64_t dz) {
