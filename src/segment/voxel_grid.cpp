@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include <omp.h>
+
 #include <fmt/format.h>
 
 #include "viewpose/core/error.hpp"
@@ -18,7 +20,16 @@ PointCloud voxel_downsample(const PointCloud& cloud, float leaf_m) {
   const CellGrid grid = bin_points(cloud.points, {}, leaf_m, 0);
   PointCloud out;
   const bool normals = cloud.has_normals(), labels = !cloud.labels.empty(), colours = !cloud.rgba.empty();
-  for (std::size_t c = 0; c < grid.cells.size(); ++c) {
+  const std::size_t cells = grid.cells.size();
+  out.points.resize(cells);
+  if (normals) out.normals.resize(cells);
+  if (labels) out.labels.resize(cells);
+  if (colours) out.rgba.resize(cells);
+  // Each voxel's mean on its own: a frame's voxels on every thread (as its points were binned),
+  // a cluster's within the frame's parallel work on the caller's. Each sum runs in the points'
+  // order, whatever the threads.
+#pragma omp parallel for schedule(dynamic, 4096) if (cloud.size() >= 32768 && !omp_in_parallel())
+  for (std::size_t c = 0; c < cells; ++c) {
     const std::size_t a = grid.first[c], b = grid.first[c + 1];
     Eigen::Vector3d sum = Eigen::Vector3d::Zero(), nsum = Eigen::Vector3d::Zero();
     for (std::size_t k = a; k < b; ++k) {
@@ -26,10 +37,10 @@ PointCloud voxel_downsample(const PointCloud& cloud, float leaf_m) {
       sum += cloud.points[i].cast<double>();
       if (normals && cloud.normals[i].allFinite()) nsum += cloud.normals[i].cast<double>();
     }
-    out.points.push_back((sum / static_cast<double>(b - a)).cast<float>());
-    if (normals) out.normals.push_back(nsum.norm() > 0 ? Eigen::Vector3f(nsum.normalized().cast<float>()) : Eigen::Vector3f::Constant(NAN));
-    if (labels) out.labels.push_back(cloud.labels[grid.items[a].second]);
-    if (colours) out.rgba.push_back(cloud.rgba[grid.items[a].second]);
+    out.points[c] = (sum / static_cast<double>(b - a)).cast<float>();
+    if (normals) out.normals[c] = nsum.norm() > 0 ? Eigen::Vector3f(nsum.normalized().cast<float>()) : Eigen::Vector3f::Constant(NAN);
+    if (labels) out.labels[c] = cloud.labels[grid.items[a].second];
+    if (colours) out.rgba[c] = cloud.rgba[grid.items[a].second];
   }
   out.width = static_cast<int>(out.points.size());
   out.height = 1;

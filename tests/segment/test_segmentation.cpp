@@ -11,6 +11,7 @@
 #include "test_support.hpp"
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/kdtree.hpp"
+#include "viewpose/core/threads.hpp"
 #include "viewpose/describe/normals.hpp"
 #include "viewpose/io/pcd.hpp"
 #include "viewpose/render/rasterizer.hpp"
@@ -36,6 +37,51 @@ TEST(VoxelGrid, OnePointPerVoxelAtTheCentroid) {
     bool found = false;
     for (const auto& p : v.points) found = found || (p - e).norm() < 1e-6f;
     EXPECT_TRUE(found) << e.transpose();
+  }
+}
+
+// A frame's worth of points is binned and averaged on every thread: the same bits as on one, and
+// as a plain map from voxel to its points in input order gives (each sum in the points' order).
+TEST(VoxelGrid, AFramesPointsGiveTheSameVoxelsOnOneThreadAndOnTwo) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<float> across(-1.2f, 1.2f), deep(0.4f, 4.0f);
+  PointCloud c;
+  for (int i = 0; i < 200000; ++i) c.points.emplace_back(across(rng), across(rng), deep(rng));
+  for (int i = 0; i < 200000; i += 997) c.points[static_cast<std::size_t>(i)] = Eigen::Vector3f(NAN, 0, 1);
+  c.points[5] = Eigen::Vector3f(1e30f, 0, 1);  // outside any grid: left out
+  for (int i = 0; i < 50000; ++i) c.points.push_back(c.points[static_cast<std::size_t>(i) * 3] + Eigen::Vector3f(0.0005f, 0, 0));
+  c.labels.resize(c.points.size());
+  std::iota(c.labels.begin(), c.labels.end(), 0u);
+  c.width = static_cast<int>(c.points.size());
+  const float leaf = 0.003f;
+  const int threads = thread_count();
+  set_thread_count(1);
+  const PointCloud one = voxel_downsample(c, leaf);
+  set_thread_count(2);
+  const PointCloud two = voxel_downsample(c, leaf);
+  set_thread_count(threads);
+  ASSERT_EQ(one.size(), two.size());
+  ASSERT_EQ(one.labels, two.labels);
+  for (std::size_t i = 0; i < one.size(); ++i) ASSERT_EQ(one.points[i], two.points[i]) << i;
+  // The reference: voxels in key order (x, then y, then z), each the mean of its points in input
+  // order, labelled by its first point.
+  std::map<std::array<std::int64_t, 3>, std::vector<std::uint32_t>> voxels;
+  for (std::uint32_t i = 0; i < c.points.size(); ++i) {
+    const Eigen::Vector3f& p = c.points[i];
+    if (!p.allFinite() || p.x() > 1e3f) continue;
+    const float inv = 1.0f / leaf;  // (as the grid scales: a product by the inverse, not a quotient)
+    voxels[{static_cast<std::int64_t>(std::floor(p.x() * inv)), static_cast<std::int64_t>(std::floor(p.y() * inv)),
+            static_cast<std::int64_t>(std::floor(p.z() * inv))}]
+        .push_back(i);
+  }
+  ASSERT_EQ(one.size(), voxels.size());
+  std::size_t k = 0;
+  for (const auto& [key, members] : voxels) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (std::uint32_t i : members) sum += c.points[i].cast<double>();
+    ASSERT_EQ(one.points[k], Eigen::Vector3f((sum / static_cast<double>(members.size())).cast<float>())) << k;
+    ASSERT_EQ(one.labels[k], members.front()) << k;
+    ++k;
   }
 }
 
