@@ -9,9 +9,8 @@ namespace viewpose {
 
 namespace {
 
-// Points from which a grid is made on every thread, in chunks of kChunk (a chunk per thread's turn:
-// a thread the system has paused holds up the others by one chunk at most).
-constexpr std::size_t kParallelFrom = 32768, kChunk = 8192;
+// Points per thread's turn: a thread the system has paused holds up the others by one chunk at most.
+constexpr std::size_t kChunk = 8192;
 
 // std::floor is a library call on baseline x86-64 (no SSE4.1 rounding instruction), three per point.
 // Finite x only; beyond +-1e12 (far outside any grid) it is clamped, as a cast would be undefined.
@@ -27,9 +26,10 @@ CellGrid bin_points(std::span<const Eigen::Vector3f> points, std::span<const std
   CellGrid grid;
   const float inv = 1.0f / cell_m;
   const std::size_t n = indices.empty() ? points.size() : indices.size();
-  // A whole frame's points are binned on every thread (the voxel grid, before any other stage of
-  // the frame can start); a cluster's, inside the frame's parallel work, on the caller's alone.
-  const bool parallel = n >= kParallelFrom && !omp_in_parallel();
+  // A frame's points are binned on every thread (the voxel grid and the frame's clusters, before
+  // any other stage of the frame can start). Inside a parallel region (a frame's clusters described
+  // side by side) the caller's thread bins alone.
+  const bool parallel = n >= kBinInParallelFrom && !omp_in_parallel();
   // Each point's cell (kLeftOut where it has none: no key has the top bit), and the box the cells span.
   constexpr std::uint64_t kLeftOut = ~std::uint64_t{0};
   std::vector<std::uint64_t> key_of(n);
@@ -37,7 +37,6 @@ CellGrid bin_points(std::span<const Eigen::Vector3f> points, std::span<const std
 #pragma omp parallel if (parallel)
   {
     std::int64_t my_lo[3] = {CellGrid::kMask, CellGrid::kMask, CellGrid::kMask}, my_hi[3] = {0, 0, 0};
-    // (Unsigned: clang compares the loop's bound with its own unsigned count of iterations.)
 #pragma omp for schedule(dynamic, kChunk) nowait
     for (std::size_t k = 0; k < n; ++k) {
       key_of[k] = kLeftOut;

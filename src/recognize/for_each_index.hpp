@@ -1,5 +1,6 @@
 #pragma once
-// A private header of the recognizer (src/recognize): its one way of running work on several threads.
+// A private header of the recognizer (src/recognize): how a region's stages spread their work over
+// threads (the frame's clusters themselves are OpenMP tasks of recognizer.cpp).
 #include <cstddef>
 
 #include <omp.h>

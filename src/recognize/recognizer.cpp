@@ -17,7 +17,6 @@
 #include "viewpose/core/stopwatch.hpp"
 #include "viewpose/core/error.hpp"
 #include "viewpose/core/transform.hpp"
-#include "viewpose/pose/coarse_fit.hpp"
 #include "viewpose/pose/confidence.hpp"
 #include "viewpose/pose/resting_plane.hpp"
 #include "viewpose/pose/through_planes.hpp"

@@ -25,10 +25,10 @@ PointCloud voxel_downsample(const PointCloud& cloud, float leaf_m) {
   if (normals) out.normals.resize(cells);
   if (labels) out.labels.resize(cells);
   if (colours) out.rgba.resize(cells);
-  // Each voxel's mean on its own: a frame's voxels on every thread (as its points were binned),
-  // a cluster's within the frame's parallel work on the caller's. Each sum runs in the points'
-  // order, whatever the threads.
-#pragma omp parallel for schedule(dynamic, 4096) if (cloud.size() >= 32768 && !omp_in_parallel())
+  // Each voxel's mean on its own: a frame's voxels on every thread, as its points were binned
+  // (inside a parallel region, the caller's thread alone). Each sum runs in the points' order,
+  // whatever the threads.
+#pragma omp parallel for schedule(dynamic, 4096) if (cloud.size() >= kBinInParallelFrom && !omp_in_parallel())
   for (std::size_t c = 0; c < cells; ++c) {
     const std::size_t a = grid.first[c], b = grid.first[c + 1];
     Eigen::Vector3d sum = Eigen::Vector3d::Zero(), nsum = Eigen::Vector3d::Zero();

@@ -264,8 +264,8 @@ TEST(OccupancyGrid, ARoomSizedCloudGetsWiderCellsAndBadInputNoGrid) {
 }
 
 TEST(CellGrid, AKeyPlusAStepIsTheNeighboursKeyAndGapsAreCountedInWholeCells) {
-  // Cells at both ends of each field that bin_points keeps with a margin of two, and near the
-  // middle, where a step across zero borrows from the field above.
+  // Cells at both ends of each field that bin_points keeps with a margin of two (the steps of
+  // -2 there are the edge cases), and about the field's middle, where coordinates cross zero.
   const std::int64_t m = 2, top = CellGrid::kMask - m;
   const std::int64_t coords[] = {m, m + 1, CellGrid::kOffset - 1, CellGrid::kOffset, CellGrid::kOffset + 1, top - 1, top};
   int checked = 0;

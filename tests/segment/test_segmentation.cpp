@@ -50,8 +50,24 @@ TEST(VoxelGrid, AFramesPointsGiveTheSameVoxelsOnOneThreadAndOnTwo) {
   for (int i = 0; i < 200000; i += 997) c.points[static_cast<std::size_t>(i)] = Eigen::Vector3f(NAN, 0, 1);
   c.points[5] = Eigen::Vector3f(1e30f, 0, 1);  // outside any grid: left out
   for (int i = 0; i < 50000; ++i) c.points.push_back(c.points[static_cast<std::size_t>(i) * 3] + Eigen::Vector3f(0.0005f, 0, 0));
+  // And a dense blob: tens of points a voxel, each voxel's mean and first label checked below.
+  std::uniform_real_distribution<float> blob(0.0f, 0.03f);
+  for (int i = 0; i < 30000; ++i) c.points.emplace_back(0.5f + blob(rng), -0.3f + blob(rng), 1.7f + blob(rng));
+  // One voxel of its own whose mean normal shows the order of its sum: forward, the first two
+  // cancel and the third is all that is left, (0.71, 0, 0.71); backward the third is lost against
+  // the second, (0, 0, 1).
+  const std::size_t ordered = c.points.size();
+  for (int i = 0; i < 3; ++i) c.points.emplace_back(0.1001f, 0.0001f, 4.5001f);
+  std::normal_distribution<float> g(0.0f, 1.0f);
+  for (std::size_t i = 0; i < ordered; ++i) c.normals.push_back(Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
+  c.normals[17] = Eigen::Vector3f::Constant(NAN);  // not summed
+  c.normals.emplace_back(1.0f, 0.0f, 0.0f);
+  c.normals.emplace_back(-1.0f, 0.0f, 0.0f);
+  c.normals.emplace_back(1e-20f, 0.0f, 1e-20f);
   c.labels.resize(c.points.size());
   std::iota(c.labels.begin(), c.labels.end(), 0u);
+  c.rgba.resize(c.points.size());
+  for (std::size_t i = 0; i < c.rgba.size(); ++i) c.rgba[i] = static_cast<std::uint32_t>(i * 2654435761u);
   c.width = static_cast<int>(c.points.size());
   const float leaf = 0.003f;
   const int threads = thread_count();
@@ -62,7 +78,12 @@ TEST(VoxelGrid, AFramesPointsGiveTheSameVoxelsOnOneThreadAndOnTwo) {
   set_thread_count(threads);
   ASSERT_EQ(one.size(), two.size());
   ASSERT_EQ(one.labels, two.labels);
-  for (std::size_t i = 0; i < one.size(); ++i) ASSERT_EQ(one.points[i], two.points[i]) << i;
+  ASSERT_EQ(one.rgba, two.rgba);
+  ASSERT_EQ(one.normals.size(), one.size());
+  for (std::size_t i = 0; i < one.size(); ++i) {
+    ASSERT_EQ(one.points[i], two.points[i]) << i;
+    ASSERT_TRUE(one.normals[i] == two.normals[i] || (one.normals[i].hasNaN() && two.normals[i].hasNaN())) << i;
+  }
   // The reference: voxels in key order (x, then y, then z), each the mean of its points in input
   // order, labelled by its first point.
   std::map<std::array<std::int64_t, 3>, std::vector<std::uint32_t>> voxels;
@@ -75,14 +96,27 @@ TEST(VoxelGrid, AFramesPointsGiveTheSameVoxelsOnOneThreadAndOnTwo) {
         .push_back(i);
   }
   ASSERT_EQ(one.size(), voxels.size());
-  std::size_t k = 0;
+  std::size_t k = 0, checked_order = 0;
   for (const auto& [key, members] : voxels) {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (std::uint32_t i : members) sum += c.points[i].cast<double>();
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero(), nsum = Eigen::Vector3d::Zero();
+    for (std::uint32_t i : members) {
+      sum += c.points[i].cast<double>();
+      if (c.normals[i].allFinite()) nsum += c.normals[i].cast<double>();
+    }
     ASSERT_EQ(one.points[k], Eigen::Vector3f((sum / static_cast<double>(members.size())).cast<float>())) << k;
+    if (nsum.norm() > 0) ASSERT_EQ(one.normals[k], Eigen::Vector3f(nsum.normalized().cast<float>())) << k;
+    else ASSERT_TRUE(one.normals[k].hasNaN()) << k;
     ASSERT_EQ(one.labels[k], members.front()) << k;
+    ASSERT_EQ(one.rgba[k], c.rgba[members.front()]) << k;
+    if (members.front() == ordered) {
+      ASSERT_EQ(members.size(), 3u);
+      EXPECT_NEAR(one.normals[k].x(), std::sqrt(0.5f), 1e-6f);
+      EXPECT_NEAR(one.normals[k].z(), std::sqrt(0.5f), 1e-6f);
+      ++checked_order;
+    }
     ++k;
   }
+  EXPECT_EQ(checked_order, 1u);
 }
 
 // Points on the plane z = 1.2 - 0.5 y (a table seen from above), 4 mm apart, 1.5 x 1.5 m.

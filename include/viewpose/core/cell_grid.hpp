@@ -4,6 +4,7 @@
 // +-3 km at 3 mm cells), x highest, so that keys sort by x, then y, then z: the cells of one
 // column (x, y) are consecutive, and a range of keys is a range of z.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -44,6 +45,10 @@ struct CellGrid {
   std::vector<std::uint64_t> cells;  ///< the occupied cells' keys, ascending
   std::vector<std::size_t> first;    ///< cells.size() + 1 entries: cell c's items are [first[c], first[c + 1])
 };
+
+/// From this many points (and outside a parallel region) bin_points, and the voxel grid's means,
+/// run on every thread: a frame's points, not a cluster's. The same results on any thread count.
+inline constexpr std::size_t kBinInParallelFrom = 32768;
 
 /// Bins the finite points among points[indices[k]] (every point when `indices` is empty) into
 /// cells of side `cell_m`. Points whose cell lies within `margin_cells` of the coordinate range's
