@@ -11,6 +11,7 @@
 #include "viewpose/core/nearest_grid.hpp"
 #include "viewpose/core/occupancy_grid.hpp"
 #include "viewpose/core/radix_sort.hpp"
+#include "viewpose/core/threads.hpp"
 
 namespace viewpose {
 namespace {
@@ -295,18 +296,26 @@ TEST(CellGrid, AKeyPlusAStepIsTheNeighboursKeyAndGapsAreCountedInWholeCells) {
 
 TEST(RadixSort, EqualsTheComparisonSortIncludingTheOrderOfEqualKeys) {
   std::mt19937_64 rng(9);
-  for (std::size_t n : {0u, 1u, 63u, 64u, 1000u, 50000u}) {
+  const int threads = thread_count();
+  // (From kRadixSortInParallelFrom items each pass runs on every thread: the sizes about it, and
+  // one of several chunks with a short last one.)
+  for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{63}, std::size_t{64}, std::size_t{1000}, std::size_t{50000},
+                        kRadixSortInParallelFrom - 1, kRadixSortInParallelFrom, std::size_t{200001}}) {
     for (int spread : {3, 20, 64}) {  // few distinct keys, some, any 64-bit value
-      SCOPED_TRACE(testing::Message() << n << " keys of " << spread << " bits");
-      std::vector<KeyedIndex> items;
-      for (std::uint32_t i = 0; i < n; ++i) {
-        const std::uint64_t key = spread == 64 ? rng() : (rng() & ((std::uint64_t{1} << spread) - 1)) << 17;
-        items.emplace_back(key, i);
+      for (int t : {1, 2}) {
+        SCOPED_TRACE(testing::Message() << n << " keys of " << spread << " bits on " << t << " threads");
+        std::vector<KeyedIndex> items;
+        for (std::uint32_t i = 0; i < n; ++i) {
+          const std::uint64_t key = spread == 64 ? rng() : (rng() & ((std::uint64_t{1} << spread) - 1)) << 17;
+          items.emplace_back(key, i);
+        }
+        std::vector<KeyedIndex> expected = items;
+        std::sort(expected.begin(), expected.end());
+        set_thread_count(t);
+        radix_sort(items);
+        set_thread_count(threads);
+        EXPECT_EQ(items, expected);
       }
-      std::vector<KeyedIndex> expected = items;
-      std::sort(expected.begin(), expected.end());
-      radix_sort(items);
-      EXPECT_EQ(items, expected);
     }
   }
 }

@@ -4,6 +4,7 @@
 // all keys share. Cells of one frame differ in few bits, so it makes three or four passes where a
 // comparison sort makes log2(n). Stable: pairs with equal keys keep their order, so with indices
 // pushed in increasing order the result equals std::sort's.
+#include <cstddef>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -11,6 +12,10 @@
 namespace viewpose {
 
 using KeyedIndex = std::pair<std::uint64_t, std::uint32_t>;
+
+/// From this many items, outside a parallel region, each pass runs on every thread (a frame's
+/// points binned into cells), with the same result.
+inline constexpr std::size_t kRadixSortInParallelFrom = 32768;
 
 void radix_sort(std::vector<KeyedIndex>& items);
 
