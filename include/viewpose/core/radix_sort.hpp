@@ -1,9 +1,10 @@
 #pragma once
 // Sorting (key, index) pairs by key, for the grids that bin points into cells (voxel grid,
 // clusters, normals): a least-significant-digit radix sort, 11 bits a pass, that skips the digits
-// all keys share. Cells of one frame differ in few bits, so it makes three or four passes where a
-// comparison sort makes log2(n). Stable: pairs with equal keys keep their order, so with indices
-// pushed in increasing order the result equals std::sort's.
+// all keys share. Cells of one frame differ in few bits (bin_points sorts dense keys over the
+// cells' box), so it makes two or three passes where a comparison sort makes log2(n). Stable:
+// pairs with equal keys keep their order, so with indices pushed in increasing order the result
+// equals std::sort's.
 #include <cstddef>
 #include <cstdint>
 #include <utility>
