@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include <omp.h>
+#include "viewpose/core/threads.hpp"
 
 namespace viewpose {
 
@@ -28,8 +28,8 @@ CellGrid bin_points(std::span<const Eigen::Vector3f> points, std::span<const std
   const std::size_t n = indices.empty() ? points.size() : indices.size();
   // A frame's points are binned on every thread (the voxel grid and the frame's clusters, before
   // any other stage of the frame can start). Inside a parallel region (a frame's clusters described
-  // side by side) the caller's thread bins alone.
-  const bool parallel = n >= kBinInParallelFrom && !omp_in_parallel();
+  // side by side) the caller's thread bins alone. The sort between follows the same decision.
+  const bool parallel = on_every_thread(n);
   // Each point's cell (kLeftOut where it has none: no key has the top bit), and the box the cells span.
   constexpr std::uint64_t kLeftOut = ~std::uint64_t{0};
   std::vector<std::uint64_t> key_of(n);

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <array>
 
-#include <omp.h>
+#include "viewpose/core/threads.hpp"
 
 namespace viewpose {
 
@@ -72,7 +72,7 @@ void radix_sort(std::vector<KeyedIndex>& items) {
     all_or |= item.first;
   }
   const std::uint64_t varying = all_and ^ all_or;  // bits that are not the same in every key
-  const bool parallel = items.size() >= kRadixSortInParallelFrom && !omp_in_parallel();
+  const bool parallel = on_every_thread(items.size());
   std::vector<std::array<std::size_t, kDigits>> counts(parallel ? (items.size() + kChunk - 1) / kChunk : 0);
   std::vector<KeyedIndex> buffer(items.size());
   for (int shift = 0; shift < 64; shift += kBits) {

@@ -4,12 +4,11 @@
 #include <cmath>
 #include <cstdint>
 
-#include <omp.h>
-
 #include <fmt/format.h>
 
-#include "viewpose/core/error.hpp"
 #include "viewpose/core/cell_grid.hpp"
+#include "viewpose/core/error.hpp"
+#include "viewpose/core/threads.hpp"
 
 namespace viewpose {
 
@@ -28,7 +27,7 @@ PointCloud voxel_downsample(const PointCloud& cloud, float leaf_m) {
   // Each voxel's mean on its own: a frame's voxels on every thread, as its points were binned
   // (inside a parallel region, the caller's thread alone). Each sum runs in the points' order,
   // whatever the threads.
-#pragma omp parallel for schedule(dynamic, 4096) if (cloud.size() >= kBinInParallelFrom && !omp_in_parallel())
+#pragma omp parallel for schedule(dynamic, 4096) if (on_every_thread(cloud.size()))
   for (std::size_t c = 0; c < cells; ++c) {
     const std::size_t a = grid.first[c], b = grid.first[c + 1];
     Eigen::Vector3d sum = Eigen::Vector3d::Zero(), nsum = Eigen::Vector3d::Zero();

@@ -297,10 +297,10 @@ TEST(CellGrid, AKeyPlusAStepIsTheNeighboursKeyAndGapsAreCountedInWholeCells) {
 TEST(RadixSort, EqualsTheComparisonSortIncludingTheOrderOfEqualKeys) {
   std::mt19937_64 rng(9);
   const int threads = thread_count();
-  // (From kRadixSortInParallelFrom items each pass runs on every thread: the sizes about it, and
+  // (From kFrameSizedFrom items each pass runs on every thread: the sizes about it, and
   // one of several chunks with a short last one.)
   for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{63}, std::size_t{64}, std::size_t{1000}, std::size_t{50000},
-                        kRadixSortInParallelFrom - 1, kRadixSortInParallelFrom, std::size_t{200001}}) {
+                        kFrameSizedFrom - 1, kFrameSizedFrom, std::size_t{200001}}) {
     for (int spread : {3, 20, 64}) {  // few distinct keys, some, any 64-bit value
       for (int t : {1, 2}) {
         SCOPED_TRACE(testing::Message() << n << " keys of " << spread << " bits on " << t << " threads");

@@ -46,13 +46,10 @@ struct CellGrid {
   std::vector<std::size_t> first;    ///< cells.size() + 1 entries: cell c's items are [first[c], first[c + 1])
 };
 
-/// From this many points (and outside a parallel region) bin_points, and the voxel grid's means,
-/// run on every thread: a frame's points, not a cluster's. The same results on any thread count.
-inline constexpr std::size_t kBinInParallelFrom = 32768;
-
 /// Bins the finite points among points[indices[k]] (every point when `indices` is empty) into
 /// cells of side `cell_m`. Points whose cell lies within `margin_cells` of the coordinate range's
-/// ends are left out, so that neighbours up to that many cells away have valid keys.
+/// ends are left out, so that neighbours up to that many cells away have valid keys. A frame's
+/// points are binned on every thread (core/threads.hpp, on_every_thread), with the same result.
 CellGrid bin_points(std::span<const Eigen::Vector3f> points, std::span<const std::uint32_t> indices, float cell_m,
                     int margin_cells);
 

@@ -14,10 +14,8 @@ namespace viewpose {
 
 using KeyedIndex = std::pair<std::uint64_t, std::uint32_t>;
 
-/// From this many items, outside a parallel region, each pass runs on every thread (a frame's
-/// points binned into cells), with the same result.
-inline constexpr std::size_t kRadixSortInParallelFrom = 32768;
-
+/// Each pass runs on every thread where the items are a frame's worth (core/threads.hpp,
+/// on_every_thread: a frame's points binned into cells), with the same result.
 void radix_sort(std::vector<KeyedIndex>& items);
 
 }  // namespace viewpose

@@ -20,6 +20,13 @@ inline constexpr const char* kSpinCountUnderLoad = "1000";
 void set_thread_count(int threads);
 /// The threads a parallel region would use now.
 int thread_count();
+/// A frame's worth of items: from this many, work over them outside a parallel region is spread over
+/// every thread (a frame's points binned into cells, their sort and their voxels' means); fewer,
+/// or inside a parallel region (a frame's clusters described side by side), the calling thread
+/// does it alone. The same results either way.
+inline constexpr std::size_t kFrameSizedFrom = 32768;
+/// Whether work over `items` items is spread over every thread (kFrameSizedFrom).
+bool on_every_thread(std::size_t items);
 /// How OpenMP's idle threads wait in this process, as its environment set it: "GOMP_SPINCOUNT=1000",
 /// "OMP_WAIT_POLICY=passive", or "libgomp's default (spin 300000)".
 std::string openmp_wait();
