@@ -1,7 +1,8 @@
 // FirstException: what an iteration or task of a parallel region throws reaches the caller after
 // the region, as an exception, instead of ending the process in std::terminate; always the lowest
-// index's, whatever the threads.
+// index's, whatever the threads. on_every_thread: a frame's worth of work outside a parallel region.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <new>
 #include <stdexcept>
@@ -106,6 +107,24 @@ TEST(FirstException, NothingThrownRethrowsNothing) {
   EXPECT_EQ(sum, 10);
   EXPECT_FALSE(failed.failed());
   EXPECT_NO_THROW(failed.rethrow());
+}
+
+// A frame's points are spread over the threads; a cluster's, or any work inside a parallel region
+// (a frame's clusters described side by side), stay on the calling thread.
+TEST(OnEveryThread, AFramesWorthOutsideAParallelRegionOnly) {
+  EXPECT_FALSE(on_every_thread(0));
+  EXPECT_FALSE(on_every_thread(kFrameSizedFrom - 1));
+  EXPECT_TRUE(on_every_thread(kFrameSizedFrom));
+  EXPECT_TRUE(on_every_thread(640 * 480));
+  // (Asked from inside a team of two; a team the runtime cut to one thread is no parallel region.)
+  int teams_of_two = 0, spread = 0;
+#pragma omp parallel num_threads(2) reduction(+ : teams_of_two, spread)
+  if (omp_get_num_threads() == 2) {
+    ++teams_of_two;
+    spread += on_every_thread(640 * 480) ? 1 : 0;
+  }
+  EXPECT_EQ(spread, 0);
+  if (teams_of_two == 0) GTEST_SKIP() << "the OpenMP runtime gave no team of two threads";
 }
 
 }  // namespace
