@@ -28,7 +28,8 @@ CellGrid bin_points(std::span<const Eigen::Vector3f> points, std::span<const std
   const std::size_t n = indices.empty() ? points.size() : indices.size();
   // A frame's points are binned on every thread (the voxel grid and the frame's clusters, before
   // any other stage of the frame can start). Inside a parallel region (a frame's clusters described
-  // side by side) the caller's thread bins alone. The sort between follows the same decision.
+  // side by side) the caller's thread bins alone. The sort between follows this decision: it is
+  // given the points kept, fewer than these where pixels had no depth.
   const bool parallel = on_every_thread(n);
   // Each point's cell (kLeftOut where it has none: no key has the top bit), and the box the cells span.
   constexpr std::uint64_t kLeftOut = ~std::uint64_t{0};
@@ -74,7 +75,7 @@ CellGrid bin_points(std::span<const Eigen::Vector3f> points, std::span<const std
                          static_cast<std::uint64_t>(z - lo[2]),
                      k};
   }
-  radix_sort(grid.items);
+  radix_sort(grid.items, parallel);
 #pragma omp parallel for schedule(dynamic, kChunk) if (parallel)
   for (std::size_t i = 0; i < m; ++i) grid.items[i].first = key_of[grid.items[i].second];
   for (std::size_t k = 0; k < grid.items.size(); ++k) {

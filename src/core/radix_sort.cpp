@@ -61,7 +61,9 @@ void parallel_pass(const std::vector<KeyedIndex>& items, std::vector<KeyedIndex>
 
 }  // namespace
 
-void radix_sort(std::vector<KeyedIndex>& items) {
+void radix_sort(std::vector<KeyedIndex>& items) { radix_sort(items, on_every_thread(items.size())); }
+
+void radix_sort(std::vector<KeyedIndex>& items, bool spread) {
   if (items.size() < 64) {
     std::sort(items.begin(), items.end());  // small: the comparison sort wins
     return;
@@ -72,7 +74,7 @@ void radix_sort(std::vector<KeyedIndex>& items) {
     all_or |= item.first;
   }
   const std::uint64_t varying = all_and ^ all_or;  // bits that are not the same in every key
-  const bool parallel = on_every_thread(items.size());
+  const bool parallel = spread && items.size() >= kChunk;  // (fewer: one chunk, no parallel pass)
   std::vector<std::array<std::size_t, kDigits>> counts(parallel ? (items.size() + kChunk - 1) / kChunk : 0);
   std::vector<KeyedIndex> buffer(items.size());
   for (int shift = 0; shift < 64; shift += kBits) {

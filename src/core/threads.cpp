@@ -11,7 +11,9 @@ void set_thread_count(int threads) { omp_set_num_threads(std::max(1, threads)); 
 
 int thread_count() { return omp_get_max_threads(); }
 
-bool on_every_thread(std::size_t items) { return items >= kFrameSizedFrom && !omp_in_parallel(); }
+bool on_every_thread(std::size_t items) {
+  return items >= kFrameSizedFrom && omp_get_max_threads() > 1 && !omp_in_parallel();
+}
 
 std::string openmp_wait() {
   std::string said;

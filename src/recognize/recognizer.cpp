@@ -9,8 +9,6 @@
 #include <mutex>
 #include <span>
 
-#include <omp.h>
-
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 

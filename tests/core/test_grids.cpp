@@ -297,24 +297,29 @@ TEST(CellGrid, AKeyPlusAStepIsTheNeighboursKeyAndGapsAreCountedInWholeCells) {
 TEST(RadixSort, EqualsTheComparisonSortIncludingTheOrderOfEqualKeys) {
   std::mt19937_64 rng(9);
   const int threads = thread_count();
-  // (From kFrameSizedFrom items each pass runs on every thread: the sizes about it, and
-  // one of several chunks with a short last one.)
-  for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{63}, std::size_t{64}, std::size_t{1000}, std::size_t{50000},
-                        kFrameSizedFrom - 1, kFrameSizedFrom, std::size_t{200001}}) {
-    for (int spread : {3, 20, 64}) {  // few distinct keys, some, any 64-bit value
+  // (From kFrameSizedFrom items, with two threads, each pass runs on every thread: the sizes about
+  // it, and one of several chunks with a short last one. A caller may ask for it at any size, as
+  // bin_points does for the points it kept of a frame's: its chunks then run on one thread too.)
+  for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{63}, std::size_t{64}, std::size_t{1000}, std::size_t{16385},
+                        std::size_t{50000}, kFrameSizedFrom - 1, kFrameSizedFrom, std::size_t{200001}}) {
+    for (int bits : {3, 20, 64}) {  // few distinct keys, some, any 64-bit value
       for (int t : {1, 2}) {
-        SCOPED_TRACE(testing::Message() << n << " keys of " << spread << " bits on " << t << " threads");
-        std::vector<KeyedIndex> items;
-        for (std::uint32_t i = 0; i < n; ++i) {
-          const std::uint64_t key = spread == 64 ? rng() : (rng() & ((std::uint64_t{1} << spread) - 1)) << 17;
-          items.emplace_back(key, i);
+        for (bool asked : {false, true}) {
+          SCOPED_TRACE(testing::Message() << n << " keys of " << bits << " bits on " << t << " threads"
+                                          << (asked ? ", spread as asked" : ""));
+          std::vector<KeyedIndex> items;
+          for (std::uint32_t i = 0; i < n; ++i) {
+            const std::uint64_t key = bits == 64 ? rng() : (rng() & ((std::uint64_t{1} << bits) - 1)) << 17;
+            items.emplace_back(key, i);
+          }
+          std::vector<KeyedIndex> expected = items;
+          std::sort(expected.begin(), expected.end());
+          set_thread_count(t);
+          if (asked) radix_sort(items, true);
+          else radix_sort(items);
+          set_thread_count(threads);
+          EXPECT_EQ(items, expected);
         }
-        std::vector<KeyedIndex> expected = items;
-        std::sort(expected.begin(), expected.end());
-        set_thread_count(t);
-        radix_sort(items);
-        set_thread_count(threads);
-        EXPECT_EQ(items, expected);
       }
     }
   }

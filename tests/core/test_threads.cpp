@@ -110,21 +110,30 @@ TEST(FirstException, NothingThrownRethrowsNothing) {
 }
 
 // A frame's points are spread over the threads; a cluster's, or any work inside a parallel region
-// (a frame's clusters described side by side), stay on the calling thread.
+// (a frame's clusters searched side by side), stay on the calling thread.
 TEST(OnEveryThread, AFramesWorthOutsideAParallelRegionOnly) {
-  EXPECT_FALSE(on_every_thread(0));
-  EXPECT_FALSE(on_every_thread(kFrameSizedFrom - 1));
-  EXPECT_TRUE(on_every_thread(kFrameSizedFrom));
-  EXPECT_TRUE(on_every_thread(640 * 480));
+  const int threads = thread_count();
+  set_thread_count(2);
+  const bool at_threshold = on_every_thread(kFrameSizedFrom), below = on_every_thread(kFrameSizedFrom - 1),
+             vga = on_every_thread(640 * 480), none = on_every_thread(0);
   // (Asked from inside a team of two; a team the runtime cut to one thread is no parallel region.)
-  int teams_of_two = 0, spread = 0;
-#pragma omp parallel num_threads(2) reduction(+ : teams_of_two, spread)
+  int threads_in_a_team_of_two = 0, spread = 0;
+#pragma omp parallel num_threads(2) reduction(+ : threads_in_a_team_of_two, spread)
   if (omp_get_num_threads() == 2) {
-    ++teams_of_two;
+    ++threads_in_a_team_of_two;
     spread += on_every_thread(640 * 480) ? 1 : 0;
   }
+  // One thread: nothing to spread over.
+  set_thread_count(1);
+  const bool one_thread = on_every_thread(640 * 480);
+  set_thread_count(threads);
+  EXPECT_TRUE(at_threshold);
+  EXPECT_TRUE(vga);
+  EXPECT_FALSE(below);
+  EXPECT_FALSE(none);
+  EXPECT_FALSE(one_thread);
   EXPECT_EQ(spread, 0);
-  if (teams_of_two == 0) GTEST_SKIP() << "the OpenMP runtime gave no team of two threads";
+  if (threads_in_a_team_of_two == 0) GTEST_SKIP() << "the OpenMP runtime gave no team of two threads";
 }
 
 }  // namespace

@@ -5,7 +5,6 @@
 // cells' box), so it makes two or three passes where a comparison sort makes log2(n). Stable:
 // pairs with equal keys keep their order, so with indices pushed in increasing order the result
 // equals std::sort's.
-#include <cstddef>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -17,5 +16,7 @@ using KeyedIndex = std::pair<std::uint64_t, std::uint32_t>;
 /// Each pass runs on every thread where the items are a frame's worth (core/threads.hpp,
 /// on_every_thread: a frame's points binned into cells), with the same result.
 void radix_sort(std::vector<KeyedIndex>& items);
+/// The same, on every thread (`spread`) or not as the caller decided (bin_points: on the points it was given).
+void radix_sort(std::vector<KeyedIndex>& items, bool spread);
 
 }  // namespace viewpose

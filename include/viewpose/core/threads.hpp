@@ -20,12 +20,14 @@ inline constexpr const char* kSpinCountUnderLoad = "1000";
 void set_thread_count(int threads);
 /// The threads a parallel region would use now.
 int thread_count();
-/// A frame's worth of items: from this many, work over them outside a parallel region is spread over
-/// every thread (a frame's points binned into cells, their sort and their voxels' means); fewer,
-/// or inside a parallel region (a frame's clusters described side by side), the calling thread
-/// does it alone. The same results either way.
+/// A frame's worth of points: from this many, work over them is spread over every thread (a frame's
+/// points binned into cells, their sort and their voxels' means); fewer, inside a parallel region
+/// (a frame's clusters searched side by side), or with one thread, the calling thread does it
+/// alone. The same results either way.
 inline constexpr std::size_t kFrameSizedFrom = 32768;
-/// Whether work over `items` items is spread over every thread (kFrameSizedFrom).
+/// Whether work over `items` items is spread over every thread (kFrameSizedFrom). A stage decides
+/// once, on its input's count, and hands the decision to the steps within it (bin_points to its
+/// sort): a frame with many pixels without depth keeps fewer points than it was given.
 bool on_every_thread(std::size_t items);
 /// How OpenMP's idle threads wait in this process, as its environment set it: "GOMP_SPINCOUNT=1000",
 /// "OMP_WAIT_POLICY=passive", or "libgomp's default (spin 300000)".
