@@ -29,7 +29,7 @@
 
 namespace viewpose {
 
-/// A hypothesis that passed verification's bounds, as RecognizerOptions::on_verified hears of it.
+/// A hypothesis that passed verification's bounds, as AcceptOptions::on_verified hears of it.
 struct VerifiedHypothesis {
   std::uint32_t object_index = 0;  ///< into ViewDatabase::objects
   Transform T_camera_object = Transform::Identity();
@@ -311,9 +311,10 @@ struct SplitOptions {
 /// Time and threads.
 struct RunOptions {
   /// Stop trying poses once the frame has taken this long (0: no limit): what is verified by then
-  /// is returned, and Recognition::cut_short says so. Checked between database views (a view's
-  /// rolls run together), so a frame overruns it by at most one view's refinement, a few ms. A
-  /// pose found in time is kept even if its half-turn check had to be left out.
+  /// is returned, and Recognition::cut_short says so. Checked before each region, screen and batch
+  /// of starting poses (RunOptions::batch, refined side by side), so a frame overruns it by at most
+  /// one batch's refinement and verification, a few ms. A pose found in time is kept even if its
+  /// challengers and half turns had to be left out.
   double deadline_ms = 0;
   /// Refine and verify independent hypotheses (a batch of starting poses, the half turns) on
   /// several threads, taken in order afterwards: the result is the same either way.
@@ -456,7 +457,7 @@ struct Recognition {
   /// enough for the region, with a pair table, votes once there; where most of a frame's time goes
   /// when it casts them.
   std::size_t voted_regions = 0;
-  /// RecognizerOptions::deadline_ms ran out: clusters, views or checks were left untried.
+  /// RunOptions::deadline_ms ran out: clusters, views or checks were left untried.
   bool cut_short = false;
   Clock::time_point started{};  ///< when recognize() began (the deadline counts from it)
 };
@@ -483,8 +484,10 @@ class Recognizer {
     const CameraIntrinsics& K;
     std::span<const Plane> planes;
   };
-  // Describe, match, align, refine and verify one cluster; the first (or best) accepted pose.
-  // With `votes`, where no view's pose passes, the point pair votes' (PoseSource both, touching).
+  // One region searched alone, neither split nor its rest recognized (a region grown from a part's
+  // pose, pieces joined, what a kept pose leaves): described, matched, its poses refined and
+  // verified; the first (or best) accepted pose. With `votes`, where no view's pose passes, the
+  // point pair votes' (PoseSource both, touching). A frame's clusters go through recognize_region.
   std::optional<Detection> recognize_cluster(const PointCloud& points, const FrameAndPlanes& frame, const VerifyOptions& verify,
                                              Recognition& out, bool votes = false) const;
   struct Refined;
@@ -584,8 +587,10 @@ class Recognizer {
   // poses as well where the region was (`votes`).
   void explain_jointly(const PointCloud& points, const Detection& partial, const FrameAndPlanes& frame, const VerifyOptions& verify,
                        Recognition& out, int depth, bool votes) const;
-  // Every roll of every matched view (and with PoseSource ppf or both, every pose the pair votes give)
-  // as a starting pose, best coarse fit first.
+  // Every roll of every matched view as a starting pose, best coarse fit first (called by
+  // describe_region). With PoseSource ppf, the pair votes' poses instead, object by object
+  // (interleave_by_object); with both and touching, search casts the votes where the views' poses
+  // fail.
   std::vector<Candidate> rank_candidates(const Region& region, Recognition& out) const;
   // Each object's point pair vote poses for the region, with their coarse fit (the model's points
   // that face the camera standing in for a view's), object by object.
@@ -713,7 +718,8 @@ class Recognizer {
   const IcpTarget& icp_target(std::uint32_t object) const { return *prepared(object).target; }
   // Past the deadline (and marks `out` cut short): no further views, parts or checks are tried.
   bool out_of_time(Recognition& out) const;
-  // Drops the detections whose pixels more confident ones already explain (resolve_scene_claims).
+  // Drops the detections whose pixels more confident ones already explain (AcceptOptions::
+  // resolve_scene_claims; pose/scene_claims: claimed_pixels, resolve_claims).
   void resolve_scene(const FrameAndPlanes& frame, Recognition& out) const;
   // Each symmetric object that stands on one of the frame's removed planes reported standing on it
   // as modelled (canonical_pose with the plane's up; search chose with the camera's default up).
@@ -737,9 +743,10 @@ class Recognizer {
 
   std::vector<std::unique_ptr<PreparedObject>> prepared_;  // one per object
   // The pair tables of a database loaded without them (ViewDatabase::pair_tables_on_disk), read
-  // when the first object's table is first asked for (its first vote; with ppf or both, when the
-  // recognizer is made); each handed to its object's PpfModel; empty where unreadable (the tables
-  // are then made from the models).
+  // when the first object's table is first asked for (its first vote; with ppf or both and a
+  // database of at most RunOptions::prepare_objects_up_to objects, when the recognizer is made);
+  // each handed to its object's PpfModel; empty where unreadable (the tables are then made from
+  // the models). A database loaded for ppf or both has read them already (database_load_options).
   mutable std::once_flag tables_on_disk_once_;
   mutable std::vector<std::shared_ptr<const PpfTable>> tables_on_disk_;
   ViewIndex index_;
