@@ -27,7 +27,7 @@ CellGrid bin_points(std::span<const Eigen::Vector3f> points, std::span<const std
   const float inv = 1.0f / cell_m;
   const std::size_t n = indices.empty() ? points.size() : indices.size();
   // A frame's points are binned on every thread (the voxel grid and the frame's clusters, before
-  // any other stage of the frame can start). Inside a parallel region (a frame's clusters described
+  // any other stage of the frame can start). Inside a parallel region (a frame's clusters searched
   // side by side) the caller's thread bins alone. The sort between follows this decision: it is
   // given the points kept, fewer than these where pixels had no depth.
   const bool parallel = on_every_thread(n);
