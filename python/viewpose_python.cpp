@@ -183,6 +183,9 @@ PYBIND11_MODULE(viewpose, m) {
                     "Regions grown from a part's pose into the rest of its cluster and searched again")
       .def_readonly("voted_regions", &Recognition::voted_regions,
                     "Regions in which point pair votes were cast (each object's votes once per region)")
+      .def_readonly("best_below_min_score", &Recognition::best_below_min_score,
+                    "The most confident pose that passed verification but scored below min_score (a Detection, or None): "
+                    "how near an object not reported came")
       .def_readonly("dropped_as_explained", &Recognition::dropped_as_explained,
                     "Detections dropped because a more confident one explains the same pixels")
       .def_readonly("dropped_inside_planes", &Recognition::dropped_inside_planes,

@@ -116,8 +116,17 @@ Eigen::Vector3d yaw_pitch_roll_deg(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
-void print_recognition(const Recognition& r) {
-  if (r.detections.empty()) fmt::print("no known object found ({} clusters, {} poses tried)\n", r.clusters, r.hypotheses);
+void print_recognition(const Recognition& r, double min_score) {
+  if (r.detections.empty()) {
+    fmt::print("no known object found ({} clusters, {} poses tried)\n", r.clusters, r.hypotheses);
+    // Why not: the nearest a pose came. A box's face seen alone, or a small patch, scores low
+    // (docs/CONFIDENCE.md); a user whose scene holds no look-alikes may take a lower --min-score.
+    if (const auto& b = r.best_below_min_score) {
+      const Eigen::Vector3d t = b->T_camera_object.translation();
+      fmt::print("  the most confident pose below --min-score {:.3f}: {} (id {}) at ({:.3f}, {:.3f}, {:.3f}) m, score {:.3f}\n",
+                 min_score, b->object_name, b->object_id, t.x(), t.y(), t.z(), b->score);
+    }
+  }
   for (const Detection& d : r.detections) {
     const Eigen::Vector3d t = d.T_camera_object.translation();
     const Eigen::Vector3d ypr = yaw_pitch_roll_deg(d.T_camera_object.linear());
@@ -163,7 +172,7 @@ void add_recognize_command(CLI::App& app, int& exit_code) {
     options.run.fill_grids_at_start = false;
     const Recognizer recognizer(db, options);
     const Recognition r = recognizer.recognize(frame);
-    print_recognition(r);
+    print_recognition(r, options.accept.min_confidence);
     if (!o->json.empty()) {
       nlohmann::json j = recognition_json(r, !o->flags.no_times);
       j["scene"] = o->scene;

@@ -20,8 +20,9 @@ void add_recognize_command(CLI::App& app, int& exit_code);
 void add_bop_command(CLI::App& app, int& exit_code);
 void add_live_command(CLI::App& app, int& exit_code);
 
-/// The detections and times in words, as `viewpose recognize` prints them.
-void print_recognition(const Recognition& r);
+/// The detections and times in words, as `viewpose recognize` prints them; where none is found,
+/// the most confident pose below `min_score` (the confidence bound the recognizer used).
+void print_recognition(const Recognition& r, double min_score);
 
 /// Prints what inspect_file found, as `viewpose info` shows it.
 void print_file_info(const std::filesystem::path& path, const FileInfo& info);

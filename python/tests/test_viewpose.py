@@ -78,6 +78,20 @@ def test_the_poses_are_the_ground_truths(scene):
         assert r.times_ms["total"] > 0 and not r.cut_short
 
 
+def test_a_pose_below_min_score_is_no_detection_but_is_told(scene):
+    png, _ = scene["frames"][0]
+    depth = viewpose.read_depth_png(png)
+    found = viewpose.Recognizer(viewpose.ViewDatabase.load(scene["db"])).recognize(depth, K=scene["K"], depth_scale=scene["scale"])
+    assert [d.object_id for d in found] == [1]
+    # No pose is certain: with min_score 1 nothing is reported, and the nearest is told, where it was found.
+    r = viewpose.Recognizer(viewpose.ViewDatabase.load(scene["db"]), min_score=1.0).recognize(depth, K=scene["K"], depth_scale=scene["scale"])
+    assert len(r) == 0
+    b = r.best_below_min_score
+    assert b is not None and b.object_id == 1 and found[0].score <= b.score < 1.0
+    assert np.linalg.norm(b.T_camera_object[:3, 3] - found[0].T_camera_object[:3, 3]) < 0.005
+    assert json.loads(r.to_json(with_times=False))["best_below_min_score"]["score"] == b.score
+
+
 def test_the_counters_are_the_jsons(scene):
     rec = viewpose.Recognizer(viewpose.ViewDatabase.load(scene["db"]))
     png, _ = scene["frames"][0]

@@ -316,6 +316,10 @@ void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   out.grown_regions += part.grown_regions;
   out.voted_regions += part.voted_regions;
   out.cut_short = out.cut_short || part.cut_short;
+  // The more confident; of two alike, the earlier cluster's (parts merge in the clusters' order).
+  if (part.best_below_min_score && (!out.best_below_min_score || part.best_below_min_score->score > out.best_below_min_score->score)) {
+    out.best_below_min_score = std::move(part.best_below_min_score);
+  }
 }
 
 void Recognizer::resolve_scene(const FrameAndPlanes& frame, Recognition& out) const {

@@ -340,6 +340,9 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
       region.best_seed = detection_from(h, region, c);
       region.best_seed->cluster_points = region.point_count;  // as grown_region counts points
     }
+    if (scored_low && (!out.best_below_min_score || h.confidence > out.best_below_min_score->score)) {
+      out.best_below_min_score = detection_from(h, region, c);
+    }
     if (!h.v.accepted) {
       if (region.try_near_misses && passes(h.v, region.near_miss) && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
         nearest_miss = &h;

@@ -139,8 +139,13 @@ expect_in("${json}" "\"screened\": 0")
 run(FALSE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json" --screen -1)
 run(FALSE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json" --budget -1)
 # The score is a probability: nothing is certain, so --min-score 1 reports nothing; out of 0..1 is a usage error.
-run(TRUE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json" --min-score 1)
+# What came nearest is said, in words and in the JSON.
+run(TRUE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json" --min-score 1
+    --json "${WORK}/below.json")
 expect_in("${OUT}" "no known object found")
+expect_in("${OUT}" "the most confident pose below --min-score 1.000: jug (id 1) at")
+file(READ "${WORK}/below.json" json)
+expect_in("${json}" "\"best_below_min_score\"")
 run(FALSE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png" --camera "${WORK}/sim/camera.json" --min-score 1.5)
 run(FALSE recognize --db "${WORK}/jug.vpdb" "${WORK}/sim/test/000001/depth/000000.png")
 expect_in("${ERR}" "needs its camera")

@@ -1,6 +1,7 @@
 // End-to-end recognition on simulated frames with ground truth (issue 5's acceptance), and on the
 // real Xtion frames of ../shared/data/ycbv_real_sample.
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <set>
@@ -67,6 +68,30 @@ TEST(Recognize, NoiseFreeJugAtOneMetreWithinFiveMillimetresAndTwoDegrees) {
     EXPECT_LT(rotation_difference_deg(d.T_camera_object.linear(), f.gt[0].T_camera_object.linear()), 2.0);
     EXPECT_GT(d.score, 0.9);
   }
+}
+
+TEST(Recognize, APoseThatScoresBelowTheBoundIsNoDetectionButIsToldAsTheNearest) {
+  const Frame frame = jug_at_one_metre(3, 0, SensorModel::ideal(), 1);
+  const Recognition found = Recognizer(jug_db()).recognize(frame);
+  ASSERT_EQ(found.detections.size(), 1u);
+  const Detection& d = found.detections[0];
+  // No pose is certain: with a bound of 1 nothing is a detection, and the most confident pose the
+  // search verified is told instead, the found one or one at least as confident, in the same place.
+  RecognizerOptions options;
+  options.accept.min_confidence = 1.0;
+  const Recognition below = Recognizer(jug_db(), options).recognize(frame);
+  EXPECT_TRUE(below.detections.empty());
+  ASSERT_TRUE(below.best_below_min_score.has_value());
+  const Detection& b = *below.best_below_min_score;
+  EXPECT_EQ(b.object_id, 1);
+  EXPECT_GE(b.score, d.score);
+  EXPECT_LT(b.score, 1.0);
+  EXPECT_TRUE(b.verification.accepted);
+  EXPECT_LT((b.T_camera_object.translation() - d.T_camera_object.translation()).norm(), 0.005);
+  EXPECT_LT(rotation_difference_deg(b.T_camera_object.linear(), d.T_camera_object.linear()), 2.0);
+  // Only what verification passed is told: with one of its bounds out of reach, nothing.
+  options.verify.min_inlier_fraction = 1.1;
+  EXPECT_FALSE(Recognizer(jug_db(), options).recognize(frame).best_below_min_score.has_value());
 }
 
 TEST(Recognize, ARecognizerKeepsTheDatabaseItIsGivenOrShares) {
@@ -198,6 +223,12 @@ void expect_same_recognition(const Recognition& a, const Recognition& b) {
     EXPECT_TRUE(a.detections[i].T_camera_object.matrix() == b.detections[i].T_camera_object.matrix());
     EXPECT_EQ(a.detections[i].score, b.detections[i].score);
   }
+  ASSERT_EQ(a.best_below_min_score.has_value(), b.best_below_min_score.has_value());
+  if (a.best_below_min_score) {
+    EXPECT_EQ(a.best_below_min_score->object_id, b.best_below_min_score->object_id);
+    EXPECT_TRUE(a.best_below_min_score->T_camera_object.matrix() == b.best_below_min_score->T_camera_object.matrix());
+    EXPECT_EQ(a.best_below_min_score->score, b.best_below_min_score->score);
+  }
 }
 
 // Room frames with the jug and a box among unknown things, walls behind: many clusters, some
@@ -229,7 +260,7 @@ TEST(Recognize, ClustersSearchedSideBySideGiveWhatOneAfterAnotherGives) {
   in_turn.run.parallel_clusters = false;
   const Recognizer side_by_side(room_db()), one_after_another(room_db(), in_turn);
   const int threads = thread_count();
-  std::size_t clusters = 0, detections = 0, frames = 0;
+  std::size_t clusters = 0, detections = 0, frames = 0, told_below = 0;
   for (const Frame& frame : room_frames()) {
     SCOPED_TRACE(frames++);
     set_thread_count(1);
@@ -239,10 +270,12 @@ TEST(Recognize, ClustersSearchedSideBySideGiveWhatOneAfterAnotherGives) {
     set_thread_count(threads);
     clusters += b.clusters;
     detections += b.detections.size();
+    told_below += b.best_below_min_score.has_value() ? 1 : 0;
     expect_same_recognition(a, b);
   }
   EXPECT_GT(clusters, 2 * frames) << "frames of several clusters";
   EXPECT_GT(detections, 0u);
+  EXPECT_GT(told_below, 0u) << "frames with a pose below the bound, merged from the clusters searched apart";
 }
 
 TEST(Recognize, OneRecognizerCalledFromTheCallersThreadsAtOnceGivesWhatEachFrameGivesAlone) {

@@ -459,6 +459,12 @@ struct Recognition {
   std::size_t voted_regions = 0;
   /// RunOptions::deadline_ms ran out: clusters, views or checks were left untried.
   bool cut_short = false;
+  /// Of the poses the search refined and verified that met every bound of verification but whose
+  /// confidence fell below AcceptOptions::min_confidence, the most confident, as it would have been
+  /// reported (`score`: its confidence). Not a detection, and none where no pose came that close: it
+  /// tells a user whose object is not found whether a pose came close, and how close (a box's face
+  /// seen alone, or a small patch of an object, scores low: docs/CONFIDENCE.md).
+  std::optional<Detection> best_below_min_score;
   Clock::time_point started{};  ///< when recognize() began (the deadline counts from it)
 };
 
