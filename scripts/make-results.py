@@ -152,8 +152,8 @@ def write_box_ply(path, sx, sy, sz):
 
 
 def flat_box(viewpose, work, orientations, log):
-    """A book alone on the table at the thesis's distances: an object of flat faces, whose views show
-    one face or two, at the default threshold and with every pose verification passed."""
+    """A book alone on the table at the thesis's distances: an object of flat faces only, at the default
+    threshold and with every pose verification passed reported."""
     mesh = work / "book.ply"
     write_box_ply(mesh, *BOOK_SIZE_M)
     db = work / "book.vpdb"
@@ -472,11 +472,11 @@ def write_page(path, m, ev, details, db_seconds, curves, margin, real, rooms, or
     w("and a global descriptor of a merged cluster describes no object. The false positives here are the")
     w("known objects' poses fitted to clutter or to the wrong part of a pile: the target is none.\n")
 
-    w("## An object of flat faces alone: a book in the thesis's experiment\n")
+    w("## An object of flat faces alone: a book at the thesis's distances\n")
     sx, sy, sz = (round(v * 100) for v in BOOK_SIZE_M)
     w(f"A box {sx} x {sz} cm and {sy} cm thick (a book standing on its edge) alone on the table, turned about the")
     w("vertical as the jug above (`simulate --model book.ply`, the mesh written by the script), against a database of")
-    w("it alone. Each view shows one or two flat faces: nothing in depth tells such a face from any flat thing")
+    w("it alone. Each view shows flat faces only: nothing in depth tells such a face from any flat thing")
     w("with its outline, and the confidence, fit in rooms full of unknown boxes and furniture, scores it low")
     w("(docs/CONFIDENCE.md). With `--min-score 0` a pose that passes verification is reported whatever its score.\n")
     w("| distance | targets | ADD-S at the default threshold | false positives | ADD-S with `--min-score 0` | false positives |")

@@ -360,6 +360,13 @@ void Recognizer::explain_jointly(const PointCloud& points, const Detection& part
     out.times.verify_ms += ms_since(tv);
     const double confidence = v.accepted ? pose_confidence(v) : 0.0;
     if (v.accepted && options_.accept.on_verified) options_.accept.on_verified({partial.object_index, partial.T_camera_object, v, confidence});
+    if (best_below_min_score(v.accepted, confidence, out)) {
+      Detection below = partial;
+      below.verification = v;
+      below.score = confidence;
+      below.cluster_points = own.size();
+      keep_below_min_score(std::move(below), frame, out);
+    }
     if (!v.accepted || confidence < options_.accept.min_confidence) continue;
     Detection first = partial;
     first.verification = v;

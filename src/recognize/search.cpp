@@ -340,9 +340,7 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
       region.best_seed = detection_from(h, region, c);
       region.best_seed->cluster_points = region.point_count;  // as grown_region counts points
     }
-    if (scored_low && (!out.best_below_min_score || h.confidence > out.best_below_min_score->score)) {
-      out.best_below_min_score = detection_from(h, region, c);
-    }
+    if (best_below_min_score(h.v.accepted, h.confidence, out)) keep_below_min_score(detection_from(h, region, c), frame, out);
     if (!h.v.accepted) {
       if (region.try_near_misses && passes(h.v, region.near_miss) && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
         nearest_miss = &h;
@@ -373,9 +371,19 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
     out.hypotheses += turned.size();
     for (const Refined& h : turned) {
       if (h.accepted && (!found || h.v.score > found->verification.score)) found = detection_from(h, region, c);
+      if (best_below_min_score(h.v.accepted, h.confidence, out)) keep_below_min_score(detection_from(h, region, c), frame, out);
     }
   }
   return found;
+}
+
+bool Recognizer::best_below_min_score(bool passed, double confidence, const Recognition& out) const {
+  return passed && confidence < options_.accept.min_confidence &&
+         (!out.best_below_min_score || confidence > out.best_below_min_score->score);
+}
+
+void Recognizer::keep_below_min_score(Detection d, const FrameAndPlanes& frame, Recognition& out) const {
+  if (!inside_planes(d.object_index, d.T_camera_object, frame)) out.best_below_min_score = std::move(d);
 }
 
 void Recognizer::challenge(const Region& region, std::size_t next, std::size_t end, Detection& best, const FrameAndPlanes& frame,

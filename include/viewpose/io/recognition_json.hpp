@@ -3,7 +3,8 @@
 // `live --json-lines` a line per frame): each detection's object, pose (R row-major, t_m in metres),
 // score and verification evidence; the frame's counts; `best_below_min_score`, where a pose met
 // every bound of verification but not the confidence bound, the most confident such, in a
-// detection's form; with `with_times`, each stage's time in ms.
+// detection's form (Recognition::best_below_min_score: beside detections it may be one of theirs
+// at a rival pose); with `with_times`, each stage's time in ms.
 // Callers add keys of their own (the scene's name, the frame's index) before writing it.
 #include <nlohmann/json.hpp>
 

@@ -459,11 +459,13 @@ struct Recognition {
   std::size_t voted_regions = 0;
   /// RunOptions::deadline_ms ran out: clusters, views or checks were left untried.
   bool cut_short = false;
-  /// Of the poses the search refined and verified that met every bound of verification but whose
-  /// confidence fell below AcceptOptions::min_confidence, the most confident, as it would have been
-  /// reported (`score`: its confidence). Not a detection, and none where no pose came that close: it
-  /// tells a user whose object is not found whether a pose came close, and how close (a box's face
-  /// seen alone, or a small patch of an object, scores low: docs/CONFIDENCE.md).
+  /// Of the poses the regions' searches refined and verified that met every bound of verification
+  /// but whose confidence fell below AcceptOptions::min_confidence (and lay inside no removed
+  /// plane), the most confident (`score`: its confidence; its pose as refined, not turned or put in
+  /// canonical form). Not a detection, and none where no pose came that close: it tells a user whose
+  /// object is not found whether a pose came close, and how close (a box's face seen alone, or a
+  /// small patch of an object, scores low: docs/CONFIDENCE.md). Where objects are found it may be
+  /// one of theirs at a rival pose, or where the search went on to find it.
   std::optional<Detection> best_below_min_score;
   Clock::time_point started{};  ///< when recognize() began (the deadline counts from it)
 };
@@ -624,6 +626,11 @@ class Recognizer {
   // `best` turned half a turn about each of its axes; the best of the four is kept.
   void turn_if_better(const Region& region, Detection& best, const FrameAndPlanes& frame, Recognition& out) const;
   Detection detection_from(const Refined& h, const Region& region, const Candidate& c) const;
+  // Whether a pose that passed verification (`passed`) with `confidence` would be the frame's most
+  // confident below the bound so far (Recognition::best_below_min_score); keep_below_min_score
+  // keeps it, unless it lies inside a removed plane (a lower bound would refuse it there too).
+  bool best_below_min_score(bool passed, double confidence, const Recognition& out) const;
+  void keep_below_min_score(Detection d, const FrameAndPlanes& frame, Recognition& out) const;
   // A cluster, or what is left of one: recognized whole, else split into convex parts; once a part
   // is recognized, its object's points are taken away and the rest recognized again (depth + 1).
   // With PoseSource touching, what a detection left is searched with the views' poses, whole and in
