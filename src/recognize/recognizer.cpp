@@ -317,7 +317,7 @@ void Recognizer::merge_part(Recognition&& part, Recognition& out) {
   out.voted_regions += part.voted_regions;
   out.cut_short = out.cut_short || part.cut_short;
   // The more confident; of two alike, the earlier cluster's (parts merge in the clusters' order).
-  if (part.best_below_min_score && (!out.best_below_min_score || part.best_below_min_score->score > out.best_below_min_score->score)) {
+  if (part.best_below_min_score && out.more_confident_than_below(part.best_below_min_score->score)) {
     out.best_below_min_score = std::move(part.best_below_min_score);
   }
 }

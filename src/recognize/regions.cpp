@@ -360,7 +360,7 @@ void Recognizer::explain_jointly(const PointCloud& points, const Detection& part
     out.times.verify_ms += ms_since(tv);
     const double confidence = v.accepted ? pose_confidence(v) : 0.0;
     if (v.accepted && options_.accept.on_verified) options_.accept.on_verified({partial.object_index, partial.T_camera_object, v, confidence});
-    if (best_below_min_score(v.accepted, confidence, out)) {
+    if (beats_best_below_min_score(v.accepted, confidence, out)) {
       Detection below = partial;
       below.verification = v;
       below.score = confidence;

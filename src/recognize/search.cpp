@@ -340,7 +340,7 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
       region.best_seed = detection_from(h, region, c);
       region.best_seed->cluster_points = region.point_count;  // as grown_region counts points
     }
-    if (best_below_min_score(h.v.accepted, h.confidence, out)) keep_below_min_score(detection_from(h, region, c), frame, out);
+    if (beats_best_below_min_score(h.v.accepted, h.confidence, out)) keep_below_min_score(detection_from(h, region, c), frame, out);
     if (!h.v.accepted) {
       if (region.try_near_misses && passes(h.v, region.near_miss) && (!nearest_miss || h.v.score > nearest_miss->v.score)) {
         nearest_miss = &h;
@@ -371,15 +371,14 @@ std::optional<Detection> Recognizer::try_candidates(const Region& region, std::s
     out.hypotheses += turned.size();
     for (const Refined& h : turned) {
       if (h.accepted && (!found || h.v.score > found->verification.score)) found = detection_from(h, region, c);
-      if (best_below_min_score(h.v.accepted, h.confidence, out)) keep_below_min_score(detection_from(h, region, c), frame, out);
+      if (beats_best_below_min_score(h.v.accepted, h.confidence, out)) keep_below_min_score(detection_from(h, region, c), frame, out);
     }
   }
   return found;
 }
 
-bool Recognizer::best_below_min_score(bool passed, double confidence, const Recognition& out) const {
-  return passed && confidence < options_.accept.min_confidence &&
-         (!out.best_below_min_score || confidence > out.best_below_min_score->score);
+bool Recognizer::beats_best_below_min_score(bool passed, double confidence, const Recognition& out) const {
+  return passed && confidence < options_.accept.min_confidence && out.more_confident_than_below(confidence);
 }
 
 void Recognizer::keep_below_min_score(Detection d, const FrameAndPlanes& frame, Recognition& out) const {

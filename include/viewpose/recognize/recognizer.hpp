@@ -467,6 +467,11 @@ struct Recognition {
   /// small patch of an object, scores low: docs/CONFIDENCE.md). Where objects are found it may be
   /// one of theirs at a rival pose, or where the search went on to find it.
   std::optional<Detection> best_below_min_score;
+  /// Whether a pose of this confidence is more confident than best_below_min_score (or there is
+  /// none): the one rule by which it is kept, within a search and across clusters merged.
+  bool more_confident_than_below(double confidence) const {
+    return !best_below_min_score || confidence > best_below_min_score->score;
+  }
   Clock::time_point started{};  ///< when recognize() began (the deadline counts from it)
 };
 
@@ -629,7 +634,7 @@ class Recognizer {
   // Whether a pose that passed verification (`passed`) with `confidence` would be the frame's most
   // confident below the bound so far (Recognition::best_below_min_score); keep_below_min_score
   // keeps it, unless it lies inside a removed plane (a lower bound would refuse it there too).
-  bool best_below_min_score(bool passed, double confidence, const Recognition& out) const;
+  bool beats_best_below_min_score(bool passed, double confidence, const Recognition& out) const;
   void keep_below_min_score(Detection d, const FrameAndPlanes& frame, Recognition& out) const;
   // A cluster, or what is left of one: recognized whole, else split into convex parts; once a part
   // is recognized, its object's points are taken away and the rest recognized again (depth + 1).
