@@ -495,6 +495,11 @@ def write_page(path, m, ev, details, db_seconds, curves, margin, real, rooms, or
         w(f"\nThe right poses' scores: median {statistics.median(scores):.2f}, lowest {scores[0]:.2f}. The poses are found;")
         w("it is the confidence that holds most of them back. A scene with no look-alikes of the objects may take a")
         w("lower `--min-score`; `recognize` says the most confident pose below it where it reports nothing.\n")
+    w("Seen edge-on, the book is a strip as wide as it is thick, which no rendered view stands exactly in line with")
+    w("(the thesis's failure case, its Figure 16): the strip itself gives starting poses, the book's thin axis across")
+    w("it and its plane turned in steps of 30 degrees (`MatchOptions::edge_on_turns`, pose/axis_starts.hpp). Farther")
+    w("away such a strip holds few pixels: at 1.5 m the book's edge shows about 140, and verification judges no pose")
+    w("on fewer than 150 (`VerifyOptions::min_inliers`).\n")
 
     w("## Commands this run used\n")
     w("```")

@@ -127,6 +127,7 @@ const Recognizer::PreparedObject& Recognizer::prepared(std::uint32_t object) con
     }
     p.closed_winding = closed_mesh_winding(p.drawn);
     p.model_box = bounding_box(o.model_points);
+    p.axes = principal_axes(o.model_points);
     // Every k-th model point, at most kPlaneTestPoints: the share inside a plane is a fraction,
     // judged against 2 %, and is asked of every pose that passes (half turns too), where the 3 mm
     // model grid of a 30 cm jug holds 30,000 points.

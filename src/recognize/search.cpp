@@ -21,6 +21,10 @@ namespace viewpose {
 
 namespace {
 
+// The middle share of a region's points whose width across the image is its strip's (a few stray
+// points at its edge, the sensor's, do not widen it).
+constexpr double kStripShare = 0.95;
+
 // Whether T lies within `metres` and `degrees` of one of `poses` (a pose refused or a place refined
 // already: MatchOptions::refused_rotation_deg, merge_rotation_deg).
 bool near_any(std::span<const Transform> poses, const Transform& T, double metres, double degrees) {
@@ -119,10 +123,11 @@ std::optional<Recognizer::Region> Recognizer::describe_region(const PointCloud& 
   if (frame.K.fx > 0 && !region.icp_source.empty()) {
     double z_sum = 0;
     for (const auto& p : region.icp_source) z_sum += static_cast<double>(p.z());
-    const double pixel_m = z_sum / static_cast<double>(region.icp_source.size()) / frame.K.fx;
+    region.pixel_m = z_sum / static_cast<double>(region.icp_source.size()) / frame.K.fx;
     const double voxel_m = static_cast<double>(db_.params.icp_voxel_m);
-    if (pixel_m > voxel_m) region.icp_points_dense *= (pixel_m / voxel_m) * (pixel_m / voxel_m);
+    if (region.pixel_m > voxel_m) region.icp_points_dense *= (region.pixel_m / voxel_m) * (region.pixel_m / voxel_m);
   }
+  if (options_.match.edge_on_turns > 0) region.strip = strip_size(region.icp_source, kStripShare);
   // Objects whose diameter is below this cannot have min_cluster_explained of the region on their
   // surface (an explained point lies within the depth tolerance, and a pixel or so, of the model).
   if (options_.match.skip_objects_too_small && frame.K.fx > 0) {
@@ -236,6 +241,7 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
     const CoarseFitInputs in{region.icp_source, &region.grid, view.icp_points, &prepared(c.object).occupancy};
     c.fit = coarse_fit(in, c.T_camera_object * view.T_view_object.inverse(), c.T_camera_object, options_.match.fit_points);
   });
+  for (const Candidate& c : edge_on_candidates(region)) candidates.push_back(c);
   if (options_.match.source == PoseSource::ppf) {
     for (Candidate& c : pair_vote_candidates(region)) candidates.push_back(c);
     ++out.voted_regions;
@@ -245,6 +251,32 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
   if (options_.match.source == PoseSource::ppf) interleave_by_object(candidates.begin(), candidates.end());
   out.times.match_ms += ms_since(t1);
   return candidates;
+}
+
+std::vector<Recognizer::Candidate> Recognizer::edge_on_candidates(const Region& region) const {
+  const MatchOptions& m = options_.match;
+  const StripSize& strip = region.strip;
+  std::vector<Candidate> out;
+  if (m.edge_on_turns < 1 || !(strip.width_m > 0) || strip.length_m < 2.0 * strip.width_m) return out;
+  // The objects among the region's nearest views (prepared for their poses already: a database of
+  // a thousand objects is not prepared whole for one strip).
+  std::vector<std::uint32_t> objects;
+  for (const Match& match : region.matches) objects.push_back(db_.views[match.view].object);
+  std::sort(objects.begin(), objects.end());
+  objects.erase(std::unique(objects.begin(), objects.end()), objects.end());
+  for (const std::uint32_t o : objects) {
+    const DatabaseObject& object = db_.objects[o];
+    if (object.diameter_m < region.smallest_diameter) continue;
+    const PreparedObject& p = prepared(o);
+    const Eigen::Vector3d& extent = p.axes.extent;  // widest first
+    if (!(extent[2] <= m.edge_on_thin_share * extent[1])) continue;
+    if (!(strip.width_m <= m.edge_on_width_share * extent[2] + m.edge_on_width_pixels * region.pixel_m)) continue;
+    for (const Transform& T : edge_on_poses(p.axes, p.plane_test_points, region.description.cloud.points, strip.across, m.edge_on_turns)) {
+      const double fit = coarse_fit_facing(region.icp_source, region.grid, object.model_points, object.model_normals, p.occupancy, T, m.fit_points);
+      out.push_back({Candidate::kFromEdgeOn, o, 0.0f, T, fit});
+    }
+  }
+  return out;
 }
 
 std::vector<Recognizer::Candidate> Recognizer::pair_vote_candidates(const Region& region) const {
@@ -296,7 +328,7 @@ Detection Recognizer::detection_from(const Refined& h, const Region& region, con
   det.score = h.confidence;
   det.icp_fitness = h.icp.fitness;
   det.icp_rmse_m = h.icp.inlier_rmse;
-  det.match_rank = c.match == Candidate::kFromPairVotes ? -1 : static_cast<int>(c.match);
+  det.match_rank = c.from_view() ? static_cast<int>(c.match) : -1;
   det.roll_deg = c.roll_deg;
   det.cluster_points = region.description.cloud.size();
   det.verification = h.v;
