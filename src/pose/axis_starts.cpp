@@ -32,8 +32,7 @@ double central_interval(std::vector<double>& values, double share) {
   return values[hi] - low;
 }
 
-// The points' least and greatest projections on each of three directions (columns of `basis`),
-// measured from `origin`.
+// The least and greatest of each coordinate of the vectors added.
 struct Span3 {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d hi = -lo;
@@ -103,16 +102,17 @@ std::vector<Transform> edge_on_poses(const PrincipalAxes& object, std::span<cons
   mean /= static_cast<double>(seen.size());
   if (!(mean.norm() > 0)) return poses;
   const Eigen::Vector3d ray = mean.normalized();
-  // The plane square to `across`: the ray's part in it first (the object's plane holds the ray).
+  // A thin axis along the ray is no edge seen: nothing across the image to turn about.
   const Eigen::Vector3d thin = across.normalized();
-  Eigen::Vector3d in_plane = ray - ray.dot(thin) * thin;
-  in_plane = in_plane.norm() > 1e-9 ? in_plane.normalized() : thin.unitOrthogonal();
+  const Eigen::Vector3d side = thin - thin.dot(ray) * ray;
+  if (!(side.norm() > 1e-6)) return poses;
+  // The plane square to `across`: the ray's part in it first (the object's plane holds the ray).
+  const Eigen::Vector3d in_plane = (ray - ray.dot(thin) * thin).normalized();
   // Where the region lies: across the image (its strip's two directions) and along the ray.
   Eigen::Matrix3d basis;
-  basis.col(0) = (thin - thin.dot(ray) * ray).normalized();
+  basis.col(0) = side.normalized();
   basis.col(1) = ray.cross(basis.col(0));
   basis.col(2) = ray;
-  if (!basis.allFinite()) return poses;
   Span3 region;
   for (const auto& p : seen) region.add(basis.transpose() * (p - mean));
   const double pi = std::acos(-1.0);

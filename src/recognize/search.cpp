@@ -258,8 +258,8 @@ std::vector<Recognizer::Candidate> Recognizer::edge_on_candidates(const Region& 
   const StripSize& strip = region.strip;
   std::vector<Candidate> out;
   if (m.edge_on_turns < 1 || !(strip.width_m > 0) || strip.length_m < 2.0 * strip.width_m) return out;
-  // The objects among the region's nearest views (prepared for their poses already: a database of
-  // a thousand objects is not prepared whole for one strip).
+  // The objects among the region's nearest views, most of them prepared for the views' poses
+  // already (a database of a thousand objects is not prepared whole for one strip).
   std::vector<std::uint32_t> objects;
   for (const Match& match : region.matches) objects.push_back(db_.views[match.view].object);
   std::sort(objects.begin(), objects.end());
@@ -270,7 +270,9 @@ std::vector<Recognizer::Candidate> Recognizer::edge_on_candidates(const Region& 
     const PreparedObject& p = prepared(o);
     const Eigen::Vector3d& extent = p.axes.extent;  // widest first
     if (!(extent[2] <= m.edge_on_thin_share * extent[1])) continue;
-    if (!(strip.width_m <= m.edge_on_width_share * extent[2] + m.edge_on_width_pixels * region.pixel_m)) continue;
+    const double thickness = extent[2];
+    if (!(strip.width_m <= m.edge_on_width_share * thickness + m.edge_on_width_pixels * region.pixel_m)) continue;
+    if (!(strip.width_m >= m.edge_on_min_width_share * thickness)) continue;
     for (const Transform& T : edge_on_poses(p.axes, p.plane_test_points, region.description.cloud.points, strip.across, m.edge_on_turns)) {
       const double fit = coarse_fit_facing(region.icp_source, region.grid, object.model_points, object.model_normals, p.occupancy, T, m.fit_points);
       out.push_back({Candidate::kFromEdgeOn, o, 0.0f, T, fit});

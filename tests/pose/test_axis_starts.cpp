@@ -119,9 +119,16 @@ TEST(AxisStarts, EdgeOnTheTruePoseIsWithinHalfATurnStepOfAStart) {
       EXPECT_LT(fine.metres, 0.004) << pitch << " " << yaw;
     }
   }
-  // Nothing to place, or no direction: no starts.
+  // Nothing to place, no direction, one along the ray (no edge seen) or no turns: no starts.
+  const Transform level = pose(90, 0);
+  const std::vector<Eigen::Vector3f> spine = book(&level);
   EXPECT_TRUE(edge_on_poses(object, model, {}, Eigen::Vector3d::UnitX(), 12).empty());
-  EXPECT_TRUE(edge_on_poses(object, model, model, Eigen::Vector3d::Zero(), 12).empty());
+  EXPECT_TRUE(edge_on_poses(object, model, spine, Eigen::Vector3d::Zero(), 12).empty());
+  Eigen::Vector3d spine_mean = Eigen::Vector3d::Zero();
+  for (const auto& p : spine) spine_mean += p.cast<double>() / static_cast<double>(spine.size());
+  EXPECT_TRUE(edge_on_poses(object, model, spine, spine_mean, 12).empty()) << "along the ray";
+  EXPECT_TRUE(edge_on_poses(object, model, spine, Eigen::Vector3d::UnitX(), 0).empty());
+  EXPECT_EQ(edge_on_poses(object, model, spine, Eigen::Vector3d::UnitX(), 1).size(), 2u);
 }
 
 }  // namespace

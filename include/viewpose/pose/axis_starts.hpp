@@ -30,8 +30,9 @@ PrincipalAxes principal_axes(std::span<const Eigen::Vector3f> points);
 
 /// The region's shape as the camera sees it: the points projected onto the plane square to the
 /// ray through their mean, `width_m` the extent of the middle `share` of them (from the quantile
-/// (1 - share) / 2 to its mirror: stray points do not widen it) along the narrower of that plane's
-/// two principal axes (`across`, unit, square to the ray), `length_m` the same along the wider. A thin object seen edge-on gives a strip whose width is its thickness and
+/// (1 - share) / 2 to its mirror: stray points do not widen it) along the narrower of that
+/// plane's two principal axes (`across`, unit, square to the ray), `length_m` the same along the
+/// wider. A thin object seen edge-on gives a strip whose width is its thickness and
 /// whose `across` is its thin axis, whether its top shows too or not. Zeros for fewer than two
 /// finite points.
 struct StripSize {
@@ -47,8 +48,10 @@ StripSize strip_size(std::span<const Eigen::Vector3f> points, double share);
 /// own axes in that plane are no guide, a spine and a foreshortened top tilt them). Each is placed
 /// as the strip shows it (seen from the ray through the region's mean, with the directions square
 /// to it taken as parallel): the middle of the object's outline across the image at the middle of
-/// the region's, its nearest point along the ray as near as the region's. 2 x `turns` poses; none
-/// when the region or the model has no finite point, or `across` is no direction.
+/// the region's, its nearest point along the ray as near as the region's (the region's extremes,
+/// untrimmed: a segmented cloud's stray pixels lie behind its surface, not before it, and ICP
+/// takes up a few millimetres). 2 x `turns` poses; none when the region or the model has no
+/// finite point, `turns` is below 1, or `across` is no direction or lies along the ray.
 std::vector<Transform> edge_on_poses(const PrincipalAxes& object, std::span<const Eigen::Vector3f> model_points,
                                      std::span<const Eigen::Vector3f> region_points, const Eigen::Vector3d& across, int turns);
 

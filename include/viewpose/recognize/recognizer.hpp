@@ -95,7 +95,7 @@ struct MatchOptions {
   /// strip no rendered view stands exactly in line with. Where a region is such a strip for an
   /// object (pose/axis_starts: its width across the image at most `edge_on_width_share` of the
   /// object's thinnest principal extent plus `edge_on_width_pixels` pixels at the region's depth,
-  /// and its length at least twice its width; the object thin, its thinnest extent at most
+  /// at least `edge_on_min_width_share` of it, and its length at least twice its width; the object thin, its thinnest extent at most
   /// `edge_on_thin_share` of its middle one, and among the region's nearest views' objects), its
   /// edge-on poses are starting poses too, the object's plane turned about its thin axis in
   /// `edge_on_turns` steps each way, ranked with the views' by coarse fit (0 turns: none).
@@ -106,6 +106,7 @@ struct MatchOptions {
   int edge_on_turns = 12;
   double edge_on_thin_share = 1.0 / 3.0;
   double edge_on_width_share = 1.5;
+  double edge_on_min_width_share = 0.5;
   double edge_on_width_pixels = 4.0;
   /// A short ICP screens the starting poses: once a region's first batch (RunOptions::batch, in
   /// coarse fit order) has failed, its next `prescreen` poses by coarse fit (0: none) are refined by
@@ -522,7 +523,7 @@ class Recognizer {
                                              Recognition& out, bool votes = false) const;
   struct Refined;
   // A starting pose: a database view (by its rank among the region's matches) turned by one CRH roll,
-  // or a pose from point pair votes (match: kFromPairVotes).
+  // a pose from point pair votes (match: kFromPairVotes), or an edge-on start (kFromEdgeOn).
   struct Candidate {
     static constexpr std::uint32_t kFromPairVotes = 0xffffffffu;  // `match` of a pose from point pair votes
     static constexpr std::uint32_t kFromEdgeOn = 0xfffffffeu;     // `match` of an edge-on pose (MatchOptions::edge_on_turns)
