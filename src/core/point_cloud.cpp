@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -57,27 +58,49 @@ BoundingBox bounding_box(std::span<const Eigen::Vector3f> points) {
   return box;
 }
 
-double core_width(std::span<const Eigen::Vector3f> points, double share) {
+PrincipalAxes principal_axes(std::span<const Eigen::Vector3f> points) {
+  PrincipalAxes a;
   std::vector<Eigen::Vector3d> finite;
   finite.reserve(points.size());
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const auto& p : points) {
     if (!p.allFinite()) continue;
     finite.push_back(p.cast<double>());
-    mean += finite.back();
+    a.mean += finite.back();
+  }
+  if (finite.size() < 2) return {};
+  a.mean /= static_cast<double>(finite.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const auto& p : finite) covariance += (p - a.mean) * (p - a.mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  // The solver orders its eigenvalues ascending: the widest spread is its last column.
+  for (int k = 0; k < 3; ++k) a.axes.col(k) = solver.eigenvectors().col(2 - k);
+  if (a.axes.determinant() < 0) a.axes.col(2) *= -1.0;
+  for (int k = 0; k < 3; ++k) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const auto& p : finite) {
+      const double v = a.axes.col(k).dot(p - a.mean);
+      lo = std::min(lo, v), hi = std::max(hi, v);
+    }
+    a.extent[k] = hi - lo;
+  }
+  return a;
+}
+
+double core_width(std::span<const Eigen::Vector3f> points, double share) {
+  const PrincipalAxes axes = principal_axes(points);
+  std::vector<Eigen::Vector3d> finite;
+  finite.reserve(points.size());
+  for (const auto& p : points) {
+    if (p.allFinite()) finite.push_back(p.cast<double>());
   }
   if (finite.size() < 2) return 0.0;
-  mean /= static_cast<double>(finite.size());
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for (const auto& p : finite) covariance += (p - mean) * (p - mean).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> axes(covariance);
   // The window of the k nearest-together projections, k = the share (at least 2 points).
   const auto k = std::clamp<std::size_t>(static_cast<std::size_t>(std::ceil(share * static_cast<double>(finite.size()))), 2,
                                          finite.size());
   std::vector<double> along(finite.size());
   double widest = 0;
   for (int axis = 0; axis < 3; ++axis) {
-    const Eigen::Vector3d u = axes.eigenvectors().col(axis);
+    const Eigen::Vector3d u = axes.axes.col(axis);
     for (std::size_t i = 0; i < finite.size(); ++i) along[i] = u.dot(finite[i]);
     std::sort(along.begin(), along.end());
     double shortest = along.back() - along.front();

@@ -41,29 +41,6 @@ struct Span3 {
 
 }  // namespace
 
-PrincipalAxes principal_axes(std::span<const Eigen::Vector3f> points) {
-  PrincipalAxes a;
-  const std::vector<Eigen::Vector3d> finite = finite_points(points);
-  if (finite.size() < 2) return a;
-  for (const auto& p : finite) a.mean += p;
-  a.mean /= static_cast<double>(finite.size());
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for (const auto& p : finite) covariance += (p - a.mean) * (p - a.mean).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
-  // The solver orders its eigenvalues ascending: the widest spread is its last column.
-  for (int k = 0; k < 3; ++k) a.axes.col(k) = solver.eigenvectors().col(2 - k);
-  if (a.axes.determinant() < 0) a.axes.col(2) *= -1.0;
-  for (int k = 0; k < 3; ++k) {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (const auto& p : finite) {
-      const double v = a.axes.col(k).dot(p - a.mean);
-      lo = std::min(lo, v), hi = std::max(hi, v);
-    }
-    a.extent[k] = hi - lo;
-  }
-  return a;
-}
-
 StripSize strip_size(std::span<const Eigen::Vector3f> points, double share) {
   const std::vector<Eigen::Vector3d> finite = finite_points(points);
   if (finite.size() < 2) return {};

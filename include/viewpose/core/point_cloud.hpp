@@ -45,6 +45,17 @@ struct BoundingBox {
 
 BoundingBox bounding_box(std::span<const Eigen::Vector3f> points);
 
+/// A point set's principal axes: the columns of `axes` (unit, right-handed), widest spread first,
+/// through `mean`; `extent[k]`, the points' full extent along axis k.
+struct PrincipalAxes {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d extent = Eigen::Vector3d::Zero();
+};
+
+/// Of the finite points (identity axes and zero extents for fewer than two).
+PrincipalAxes principal_axes(std::span<const Eigen::Vector3f> points);
+
 /// The widest, over the points' three principal axes, of the shortest interval holding `share` of
 /// their projections (finite points only; 0 for fewer than two). No ball narrower than this holds
 /// `share` of the points: along any axis, the points in a ball of diameter D project into D.

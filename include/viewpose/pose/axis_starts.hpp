@@ -13,20 +13,10 @@
 
 #include <Eigen/Core>
 
+#include "viewpose/core/point_cloud.hpp"
 #include "viewpose/core/transform.hpp"
 
 namespace viewpose {
-
-/// A point set's principal axes: the columns of `axes` (unit, right-handed), widest spread first,
-/// through `mean`; `extent[k]`, the points' full extent along axis k.
-struct PrincipalAxes {
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d extent = Eigen::Vector3d::Zero();
-};
-
-/// Of the finite points (identity axes and zero extents for fewer than two).
-PrincipalAxes principal_axes(std::span<const Eigen::Vector3f> points);
 
 /// The region's shape as the camera sees it: the points projected onto the plane square to the
 /// ray through their mean, `width_m` the extent of the middle `share` of them (from the quantile

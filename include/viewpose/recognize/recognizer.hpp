@@ -95,8 +95,9 @@ struct MatchOptions {
   /// strip no rendered view stands exactly in line with. Where a region is such a strip for an
   /// object (pose/axis_starts: its width across the image at most `edge_on_width_share` of the
   /// object's thinnest principal extent plus `edge_on_width_pixels` pixels at the region's depth,
-  /// at least `edge_on_min_width_share` of it, and its length at least twice its width; the object thin, its thinnest extent at most
-  /// `edge_on_thin_share` of its middle one, and among the region's nearest views' objects), its
+  /// at least `edge_on_min_width_share` of it, and its length at least twice its width; the object
+  /// thin, its thinnest extent at most `edge_on_thin_share` of its middle one, and among the
+  /// region's nearest views' objects), its
   /// edge-on poses are starting poses too, the object's plane turned about its thin axis in
   /// `edge_on_turns` steps each way, ranked with the views' by coarse fit (0 turns: none).
   /// Measured on make results' book (20 x 15 x 2 cm, 80 frames at the thesis's distances) with
@@ -551,7 +552,6 @@ class Recognizer {
     OccupancyGrid grid;  // icp_source's occupied cells (MatchOptions::fit_cell_m): each starting pose's coarse fit
     double icp_points_dense = 0;  // icp_source's count, as if the sensor sampled it at least every 5 mm
     double smallest_diameter = 0;  // objects narrower than this cannot explain the region
-    StripSize strip;               // of icp_source as the camera sees it (edge_on_candidates)
     double pixel_m = 0;            // a pixel's width at the region's mean depth (0: no intrinsics)
     VerifyOptions verify;
     VerifyOptions near_miss;  // verify with the looser conflict bound of a pose the wrong way round
