@@ -426,11 +426,13 @@ void Recognizer::keep_below_min_score(Detection d, const FrameAndPlanes& frame, 
 void Recognizer::challenge(const Region& region, std::size_t next, std::size_t end, Detection& best, const FrameAndPlanes& frame,
                            Recognition& out) const {
   // Another object may explain the region better (two boxes of similar size): the other objects'
-  // next few starting poses are tried, and the higher verification score wins.
+  // next few starting poses are tried, and the higher verification score wins. A doubtful pose
+  // (MatchOptions::doubtful_confidence) is challenged by its own object's next poses too.
+  const bool doubtful = best.score < options_.match.doubtful_confidence;
   std::vector<std::size_t> tried(db_.objects.size(), 0), which;
   for (std::size_t i = next; i < end; ++i) {
     const std::uint32_t object = region.candidates[i].object;
-    if (object == best.object_index || tried[object]++ >= options_.match.challenger_views) continue;
+    if ((object == best.object_index && !doubtful) || tried[object]++ >= options_.match.challenger_views) continue;
     if (!refused_after_screen(region, region.candidates[i], frame, out)) which.push_back(i);
   }
   const std::size_t batch = std::max<std::size_t>(1, options_.run.batch);
