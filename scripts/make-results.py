@@ -499,7 +499,9 @@ def write_page(path, m, ev, details, db_seconds, curves, margin, real, rooms, or
     w("(the thesis's failure case, its Figure 16): the strip itself gives starting poses, the book's thin axis across")
     w("it and its plane turned in steps of 30 degrees (`MatchOptions::edge_on_turns`, pose/axis_starts.hpp). Farther")
     w("away such a strip holds few pixels: at 1.5 m the book's edge shows about 140, and verification judges no pose")
-    w("on fewer than 150 (`VerifyOptions::min_inliers`).\n")
+    w("on fewer than 150 (`VerifyOptions::min_inliers`). A flat face or an edge far away passes verification in more")
+    w("than one pose, and the first to pass is not always the right one: a pose with a confidence under 0.5, which only")
+    w("a low `--min-score` accepts, is challenged by the object's own next poses (`MatchOptions::doubtful_confidence`).\n")
 
     w("## Commands this run used\n")
     w("```")
