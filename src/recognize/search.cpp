@@ -255,26 +255,23 @@ std::vector<Recognizer::Candidate> Recognizer::rank_candidates(const Region& reg
 std::vector<Recognizer::Candidate> Recognizer::edge_on_candidates(const Region& region) const {
   const MatchOptions& m = options_.match;
   std::vector<Candidate> out;
-  if (m.edge_on_turns < 1) return out;
-  // The thin objects among the region's nearest views, most of them prepared for the views' poses
+  if (m.edge_on_turns < 1 || region.matches.empty()) return out;
+  // The region's shape as the camera sees it: only a strip can be a thin object's edge.
+  const StripSize strip = strip_size(region.icp_source, kStripShare);
+  if (!(strip.width_m > 0) || strip.length_m < 2.0 * strip.width_m) return out;
+  // The objects among the region's nearest views, most of them prepared for the views' poses
   // already (a database of a thousand objects is not prepared whole for one strip).
   std::vector<std::uint32_t> objects;
   for (const Match& match : region.matches) objects.push_back(db_.views[match.view].object);
   std::sort(objects.begin(), objects.end());
   objects.erase(std::unique(objects.begin(), objects.end()), objects.end());
-  std::erase_if(objects, [&](std::uint32_t o) {
-    if (db_.objects[o].diameter_m < region.smallest_diameter) return true;
-    const Eigen::Vector3d& extent = prepared(o).axes.extent;  // widest first
-    return !(extent[2] <= m.edge_on_thin_share * extent[1]);
-  });
-  if (objects.empty()) return out;
-  // The region's shape as the camera sees it, measured only where a thin object might explain it.
-  const StripSize strip = strip_size(region.icp_source, kStripShare);
-  if (!(strip.width_m > 0) || strip.length_m < 2.0 * strip.width_m) return out;
   for (const std::uint32_t o : objects) {
     const DatabaseObject& object = db_.objects[o];
+    if (object.diameter_m < region.smallest_diameter) continue;
     const PreparedObject& p = prepared(o);
-    const double thickness = p.axes.extent[2];
+    const Eigen::Vector3d& extent = p.axes.extent;  // widest first
+    if (!(extent[2] <= m.edge_on_thin_share * extent[1])) continue;
+    const double thickness = extent[2];
     if (!(strip.width_m <= m.edge_on_width_share * thickness + m.edge_on_width_pixels * region.pixel_m)) continue;
     if (!(strip.width_m >= m.edge_on_min_width_share * thickness)) continue;
     for (const Transform& T : edge_on_poses(p.axes, p.plane_test_points, region.description.cloud.points, strip.across, m.edge_on_turns)) {

@@ -1127,6 +1127,7 @@ TEST(Recognize, ADoubtfulPoseIsChallengedByItsOwnObjectsNextPoses) {
   const SimDataset ds = make_seed_experiment(model, K, setup, 1);
   const double diameter = mesh_diameter(book);
   int right[2] = {0, 0}, wrong[2] = {0, 0}, doubtful = 0;
+  std::size_t tried[2] = {0, 0};
   for (std::size_t image = 0; image < ds.scenes[0].images.size(); ++image) {
     const SimulatedFrame f = simulate_image(ds, ds.scenes[0].images[image], SensorModel::kinect_v1(), 700 + image);
     const Frame frame = frame_from_depth(f.depth, K);
@@ -1135,6 +1136,7 @@ TEST(Recognize, ADoubtfulPoseIsChallengedByItsOwnObjectsNextPoses) {
       options.accept.min_confidence = 0.0;
       options.match.doubtful_confidence = challenged ? 0.5 : 0.0;
       const Recognition r = Recognizer(db, options).recognize(frame);
+      tried[challenged] += r.hypotheses;
       for (const Detection& d : r.detections) {
         const bool ok = add_s_error(d.T_camera_object, f.gt[0].T_camera_object, book.vertices) < 0.1 * diameter;
         (ok ? right : wrong)[challenged] += 1;
@@ -1142,10 +1144,13 @@ TEST(Recognize, ADoubtfulPoseIsChallengedByItsOwnObjectsNextPoses) {
       }
     }
   }
-  // Measured: 18 right and 2 wrong unchallenged, 19 and 1 challenged; 7 of the poses reported doubtful.
+  // Measured: 18 right and 2 wrong unchallenged, 19 and 1 challenged; 7 of the poses reported
+  // doubtful; 89 and 110 poses tried. (Which frame turns depends on the last bits of the noise and
+  // the arithmetic; that the challenge ran, and made nothing worse, does not.)
   EXPECT_GT(doubtful, 0);
+  EXPECT_GT(tried[1], tried[0]);  // the doubtful poses were challenged
   EXPECT_GE(right[1], right[0]);
-  EXPECT_LT(wrong[1], wrong[0]);
+  EXPECT_LE(wrong[1], wrong[0]);
 }
 
 TEST(Frame, IntrinsicsAreRecoveredFromAnOrganizedCloud) {

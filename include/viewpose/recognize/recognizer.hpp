@@ -97,13 +97,13 @@ struct MatchOptions {
   /// object's thinnest principal extent plus `edge_on_width_pixels` pixels at the region's depth,
   /// at least `edge_on_min_width_share` of it, and its length at least twice its width; the object
   /// thin, its thinnest extent at most `edge_on_thin_share` of its middle one, and among the
-  /// region's nearest views' objects), its
-  /// edge-on poses are starting poses too, the object's plane turned about its thin axis in
-  /// `edge_on_turns` steps each way, ranked with the views' by coarse fit (0 turns: none).
-  /// Measured on make results' book (20 x 15 x 2 cm, 80 frames at the thesis's distances) with
-  /// `--min-score 0`: 77 -> 78 right (ADD-S), and one wrong pose (score 0.01) where none passed
-  /// before; at the default threshold the same 31. Every other set of make results, the real YCB-V
-  /// frames and the real negatives: the same detections (mOSD's test25 tries 51 -> 56 poses).
+  /// region's nearest views' objects), its edge-on poses are starting poses too, the object's
+  /// plane turned about its thin axis in `edge_on_turns` steps each way, ranked with the views' by
+  /// coarse fit (0 turns: none). Measured on make results' book (20 x 15 x 2 cm, 80 frames at the
+  /// thesis's distances) with `--min-score 0`: 77 -> 78 right (ADD-S), and one wrong pose (score
+  /// 0.01) where none passed before (since gone: `doubtful_confidence`); at the default threshold
+  /// the same 31. Every other set of make results, the real YCB-V frames and the real negatives:
+  /// the same detections (mOSD's test25 tries 51 -> 56 poses).
   int edge_on_turns = 12;
   double edge_on_thin_share = 1.0 / 3.0;
   double edge_on_width_share = 1.5;
@@ -180,14 +180,15 @@ struct MatchOptions {
   double min_region_to_view = 0.1;
   /// Once a pose of one object passes, each other object tries up to this many of its next starting
   /// poses (within the budget), and the higher verification score wins (0: the first pass stands).
-  /// Where the pose that passed is doubtful, its confidence below `doubtful_confidence` (more likely
-  /// wrong than right: only a `--min-score` below it accepts such a pose), its own object's next
-  /// poses challenge it too: a flat face or a thin edge far away passes in more than one pose, and
-  /// the first to pass is not always the right one. Measured with `--min-score 0` (0: off):
-  /// make results' book 78 right and 1 wrong -> 79 right and none wrong of 80; the simulated rooms
-  /// and clutter the same found and false (2 poses of 42 moved a little), 12-15 % more time; mOSD
-  /// against HOPE 7 -> 6 false. At the default bound no accepted pose is doubtful: nothing changes.
   std::size_t challenger_views = 3;
+  /// Where the pose that passed is doubtful, its confidence below this (more likely wrong than
+  /// right: only a `--min-score` below it accepts such a pose), its own object's next poses
+  /// challenge it too, up to `challenger_views` of them (0: not): a flat face or a thin edge far
+  /// away passes in more than one pose, and the first to pass is not always the right one.
+  /// Measured with `--min-score 0`: make results' book 78 right and 1 wrong -> 79 right and none
+  /// wrong of 80; the simulated rooms and clutter the same found and false (2 poses of 42 moved a
+  /// little), 12-15 % more time; mOSD against HOPE 7 -> 6 false. At the default bound no accepted
+  /// pose is doubtful: nothing changes.
   double doubtful_confidence = 0.5;
   double max_region_size_factor = 1.5;  ///< regions wider than this x the largest object are not tried
   /// Many views and rolls of a region refine to the same pose. One that ICP brings within this
